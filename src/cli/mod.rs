@@ -1,0 +1,63 @@
+//! Command implementations; each subcommand has its own file with its `Args` and `run`.
+
+pub mod inspect;
+
+use std::io::Write;
+use std::process::ExitCode;
+
+/// Options shared by every command.
+#[derive(Clone, Debug)]
+pub struct Ctx {
+    /// `--quiet`: errors only.
+    pub quiet: bool,
+    /// `-v` count.
+    #[allow(dead_code)]
+    pub verbose: u8,
+}
+
+struct Logger {
+    level: log::LevelFilter,
+}
+
+impl log::Log for Logger {
+    fn enabled(&self, metadata: &log::Metadata) -> bool {
+        metadata.level() <= self.level && metadata.target().starts_with("fluidymation")
+    }
+    fn log(&self, record: &log::Record) {
+        if self.enabled(record.metadata()) {
+            let label = match record.level() {
+                log::Level::Error => "error",
+                log::Level::Warn => "warning",
+                log::Level::Info => "info",
+                _ => "debug",
+            };
+            let _ = writeln!(std::io::stderr(), "{}: {}", label, record.args());
+        }
+    }
+    fn flush(&self) {}
+}
+
+/// Routes the library's `log` messages to stderr (`warning: …`).
+pub fn init_logging(quiet: bool, verbose: u8) {
+    let level = match (quiet, verbose) {
+        (true, _) => log::LevelFilter::Error,
+        (false, 0) => log::LevelFilter::Warn,
+        (false, 1) => log::LevelFilter::Info,
+        _ => log::LevelFilter::Debug,
+    };
+    if log::set_boxed_logger(Box::new(Logger { level })).is_ok() {
+        log::set_max_level(level);
+    }
+}
+
+/// Prints `error: …` with its chain of causes; exit code 130 when cancelled, else 1.
+pub fn report_error(err: &anyhow::Error) -> ExitCode {
+    let mut stderr = std::io::stderr();
+    let _ = writeln!(stderr, "error: {}", err);
+    for cause in err.chain().skip(1) {
+        let _ = writeln!(stderr, "  caused by: {}", cause);
+    }
+    let cancelled =
+        err.chain().any(|c| matches!(c.downcast_ref::<fluidymation::Error>(), Some(fluidymation::Error::Cancelled)));
+    if cancelled { ExitCode::from(130) } else { ExitCode::from(1) }
+}

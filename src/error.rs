@@ -1,0 +1,192 @@
+//! The library's one error type.
+//!
+//! Every variant carries what a user needs to fix the problem: the file, the layer or the
+//! value, and what was expected. Messages are written for motion designers running the CLI.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// A `Result` with the library's [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Everything that can go wrong in fluidymation.
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum Error {
+    /// Reading or writing a file failed.
+    Io {
+        /// The file or directory.
+        path: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// A JSON file could not be parsed.
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line of the problem.
+        line: usize,
+        /// 1-based column of the problem.
+        column: usize,
+        /// What serde_json reported.
+        message: String,
+    },
+    /// A TOML file (exemplar metadata, styles file) could not be parsed.
+    Toml {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong, with the location when known.
+        message: String,
+    },
+    /// An animation file parsed but its content is not usable (missing `w`, NaN values, …).
+    InvalidAnimation {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong and, where possible, what to do about it.
+        message: String,
+    },
+    /// An image file could not be decoded or encoded.
+    Image {
+        /// The file.
+        path: PathBuf,
+        /// The decoder's message.
+        message: String,
+    },
+    /// Images of one sequence do not all have the same size.
+    SizeMismatch {
+        /// The offending file.
+        path: PathBuf,
+        /// Size of the first image of the sequence.
+        expected: (u32, u32),
+        /// Size of this file.
+        found: (u32, u32),
+    },
+    /// An input has nothing in it (no frames, no layers, an empty mask …).
+    Empty {
+        /// The file or directory.
+        path: PathBuf,
+        /// What is missing.
+        what: String,
+    },
+    /// A safety limit was exceeded (canvas side, frame count, element count).
+    Limit {
+        /// The file.
+        path: PathBuf,
+        /// What exceeded the limit, e.g. "canvas width".
+        what: String,
+        /// The value found.
+        value: f64,
+        /// The largest value allowed.
+        limit: f64,
+    },
+    /// A parameter is outside its valid range.
+    InvalidParam {
+        /// The parameter's name (as on the command line).
+        name: String,
+        /// The value given.
+        value: String,
+        /// The allowed range or values.
+        allowed: String,
+    },
+    /// An exemplar folder is malformed.
+    Exemplar {
+        /// The exemplar folder (or file inside it).
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// No exemplar of this name was found.
+    UnknownExemplar {
+        /// The name asked for.
+        name: String,
+        /// The names that exist.
+        available: Vec<String>,
+    },
+    /// No layer of this name or index exists.
+    UnknownLayer {
+        /// The name or index asked for.
+        name: String,
+        /// The layers that exist.
+        available: Vec<String>,
+    },
+    /// The work was cancelled through a progress callback.
+    Cancelled,
+}
+
+impl Error {
+    /// Shorthand for an [`Error::Io`] on `path`.
+    pub fn io(path: impl AsRef<Path>, source: std::io::Error) -> Self {
+        Error::Io { path: path.as_ref().to_path_buf(), source }
+    }
+
+    /// Shorthand for an [`Error::InvalidParam`].
+    pub fn param(name: &str, value: impl fmt::Display, allowed: impl Into<String>) -> Self {
+        Error::InvalidParam { name: name.to_string(), value: value.to_string(), allowed: allowed.into() }
+    }
+
+    /// Shorthand for an [`Error::InvalidAnimation`].
+    pub fn animation(path: impl AsRef<Path>, message: impl Into<String>) -> Self {
+        Error::InvalidAnimation { path: path.as_ref().to_path_buf(), message: message.into() }
+    }
+
+    /// Shorthand for an [`Error::Image`].
+    pub fn image(path: impl AsRef<Path>, message: impl fmt::Display) -> Self {
+        Error::Image { path: path.as_ref().to_path_buf(), message: message.to_string() }
+    }
+
+    /// Shorthand for an [`Error::Exemplar`].
+    pub fn exemplar(path: impl AsRef<Path>, message: impl Into<String>) -> Self {
+        Error::Exemplar { path: path.as_ref().to_path_buf(), message: message.into() }
+    }
+}
+
+fn list(names: &[String]) -> String {
+    if names.is_empty() { "(none)".to_string() } else { names.join(", ") }
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::Io { path, source } => write!(f, "'{}': {}", path.display(), source),
+            Error::Json { path, line, column, message } => {
+                write!(f, "'{}' is not valid JSON at line {}, column {}: {}", path.display(), line, column, message)
+            }
+            Error::Toml { path, message } => write!(f, "'{}' is not valid TOML: {}", path.display(), message),
+            Error::InvalidAnimation { path, message } => write!(f, "'{}': {}", path.display(), message),
+            Error::Image { path, message } => write!(f, "image '{}': {}", path.display(), message),
+            Error::SizeMismatch { path, expected, found } => write!(
+                f,
+                "'{}' is {}x{} but the sequence's first image is {}x{}; all frames must have the same size",
+                path.display(),
+                found.0,
+                found.1,
+                expected.0,
+                expected.1
+            ),
+            Error::Empty { path, what } => write!(f, "'{}': {}", path.display(), what),
+            Error::Limit { path, what, value, limit } => {
+                write!(f, "'{}': {} is {} but at most {} is supported", path.display(), what, value, limit)
+            }
+            Error::InvalidParam { name, value, allowed } => {
+                write!(f, "parameter '{}' - value '{}' is invalid: expected {}", name, value, allowed)
+            }
+            Error::Exemplar { path, message } => write!(f, "exemplar '{}': {}", path.display(), message),
+            Error::UnknownExemplar { name, available } => {
+                write!(f, "no exemplar named '{}'; available: {}", name, list(available))
+            }
+            Error::UnknownLayer { name, available } => {
+                write!(f, "no layer named '{}'; layers: {}", name, list(available))
+            }
+            Error::Cancelled => write!(f, "cancelled"),
+        }
+    }
+}
+
+impl std::error::Error for Error {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            Error::Io { source, .. } => Some(source),
+            _ => None,
+        }
+    }
+}

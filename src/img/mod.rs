@@ -1,0 +1,243 @@
+//! Small, boring image types: planar images of any pixel type, masks, Gaussian blur,
+//! bilinear sampling, resampling, and PNG input/output with atomic writes.
+//!
+//! Colors are stored as `[f32; 3]` / `[f32; 4]` in non-linear sRGB scaled to `0..=1`
+//! (what PNG files hold); alpha is straight (not premultiplied) unless a function says
+//! otherwise.
+
+mod blur;
+mod io;
+mod resample;
+
+pub use blur::{gaussian_blur, gaussian_kernel};
+pub use io::{
+    atomic_write, load_gray, load_rgb, load_rgba, save_gray, save_mask, save_rgb, save_rgba, write_png_rgba8,
+};
+pub use resample::{downsample2, resize_bilinear, sample_bilinear};
+
+/// An RGB color, sRGB components in `0..=1`.
+pub type Rgb = [f32; 3];
+/// An RGBA color, sRGB components and straight alpha in `0..=1`.
+pub type Rgba = [f32; 4];
+
+/// A rectangular image with one value of type `T` per pixel, stored row by row.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plane<T> {
+    width: usize,
+    height: usize,
+    data: Vec<T>,
+}
+
+/// A binary mask: `true` where the medium (paint) is present.
+pub type Mask = Plane<bool>;
+
+impl<T: Copy + Default> Plane<T> {
+    /// A `width × height` plane filled with `T::default()`.
+    pub fn new(width: usize, height: usize) -> Self {
+        Self::filled(width, height, T::default())
+    }
+}
+
+impl<T: Copy> Plane<T> {
+    /// A `width × height` plane filled with `value`.
+    pub fn filled(width: usize, height: usize, value: T) -> Self {
+        Plane { width, height, data: vec![value; width * height] }
+    }
+
+    /// Builds a plane from a function of the pixel coordinates.
+    pub fn from_fn(width: usize, height: usize, mut f: impl FnMut(usize, usize) -> T) -> Self {
+        let mut data = Vec::with_capacity(width * height);
+        for y in 0..height {
+            for x in 0..width {
+                data.push(f(x, y));
+            }
+        }
+        Plane { width, height, data }
+    }
+
+    /// Wraps row-major `data`; `None` if its length is not `width * height`.
+    pub fn from_vec(width: usize, height: usize, data: Vec<T>) -> Option<Self> {
+        (data.len() == width * height).then_some(Plane { width, height, data })
+    }
+
+    /// Width in pixels.
+    #[inline]
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Height in pixels.
+    #[inline]
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// `(width, height)`.
+    #[inline]
+    pub fn size(&self) -> (usize, usize) {
+        (self.width, self.height)
+    }
+
+    /// Number of pixels.
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.data.len()
+    }
+
+    /// True for a plane without pixels.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.data.is_empty()
+    }
+
+    /// The value at `(x, y)`; panics when out of bounds.
+    #[inline]
+    pub fn get(&self, x: usize, y: usize) -> T {
+        self.data[y * self.width + x]
+    }
+
+    /// The value at `(x, y)` with coordinates clamped into the plane.
+    #[inline]
+    pub fn get_clamped(&self, x: isize, y: isize) -> T {
+        let x = x.clamp(0, self.width as isize - 1) as usize;
+        let y = y.clamp(0, self.height as isize - 1) as usize;
+        self.data[y * self.width + x]
+    }
+
+    /// Sets the value at `(x, y)`.
+    #[inline]
+    pub fn set(&mut self, x: usize, y: usize, value: T) {
+        self.data[y * self.width + x] = value;
+    }
+
+    /// Mutable access to the value at `(x, y)`.
+    #[inline]
+    pub fn at_mut(&mut self, x: usize, y: usize) -> &mut T {
+        &mut self.data[y * self.width + x]
+    }
+
+    /// Row `y`.
+    #[inline]
+    pub fn row(&self, y: usize) -> &[T] {
+        &self.data[y * self.width..(y + 1) * self.width]
+    }
+
+    /// Row `y`, mutable.
+    #[inline]
+    pub fn row_mut(&mut self, y: usize) -> &mut [T] {
+        &mut self.data[y * self.width..(y + 1) * self.width]
+    }
+
+    /// All pixels, row-major.
+    #[inline]
+    pub fn data(&self) -> &[T] {
+        &self.data
+    }
+
+    /// All pixels, row-major, mutable.
+    #[inline]
+    pub fn data_mut(&mut self) -> &mut [T] {
+        &mut self.data
+    }
+
+    /// Consumes the plane, returning its pixels.
+    pub fn into_vec(self) -> Vec<T> {
+        self.data
+    }
+
+    /// A new plane with `f` applied to every pixel.
+    pub fn map<U: Copy>(&self, f: impl FnMut(T) -> U) -> Plane<U> {
+        Plane { width: self.width, height: self.height, data: self.data.iter().copied().map(f).collect() }
+    }
+
+    /// True when `(x, y)` (signed) lies inside the plane.
+    #[inline]
+    pub fn contains(&self, x: isize, y: isize) -> bool {
+        x >= 0 && y >= 0 && (x as usize) < self.width && (y as usize) < self.height
+    }
+}
+
+impl Plane<bool> {
+    /// Number of `true` pixels (`|I|` in the papers).
+    pub fn count(&self) -> usize {
+        self.data.iter().filter(|&&b| b).count()
+    }
+
+    /// The mask as a coverage plane (1 inside, 0 outside).
+    pub fn to_coverage(&self) -> Plane<f32> {
+        self.map(|b| if b { 1.0 } else { 0.0 })
+    }
+}
+
+impl Plane<f32> {
+    /// Pixels with value `>= threshold` become `true`.
+    pub fn threshold(&self, threshold: f32) -> Mask {
+        self.map(|v| v >= threshold)
+    }
+}
+
+/// Pixel types that can be blended linearly (blur, bilinear sampling, voting).
+pub trait Blend: Copy + Default + Send + Sync {
+    /// `self + other * w`.
+    fn add_scaled(self, other: Self, w: f32) -> Self;
+    /// `self * w`.
+    fn scale(self, w: f32) -> Self;
+}
+
+impl Blend for f32 {
+    #[inline]
+    fn add_scaled(self, other: Self, w: f32) -> Self {
+        self + other * w
+    }
+    #[inline]
+    fn scale(self, w: f32) -> Self {
+        self * w
+    }
+}
+
+impl<const N: usize> Blend for [f32; N]
+where
+    [f32; N]: Default,
+{
+    #[inline]
+    fn add_scaled(mut self, other: Self, w: f32) -> Self {
+        for i in 0..N {
+            self[i] += other[i] * w;
+        }
+        self
+    }
+    #[inline]
+    fn scale(mut self, w: f32) -> Self {
+        for v in &mut self {
+            *v *= w;
+        }
+        self
+    }
+}
+
+impl Blend for glam::Vec2 {
+    #[inline]
+    fn add_scaled(self, other: Self, w: f32) -> Self {
+        self + other * w
+    }
+    #[inline]
+    fn scale(self, w: f32) -> Self {
+        self * w
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plane_basics() {
+        let p = Plane::from_fn(3, 2, |x, y| (x + 10 * y) as f32);
+        assert_eq!(p.get(2, 1), 12.0);
+        assert_eq!(p.row(1), &[10.0, 11.0, 12.0]);
+        assert_eq!(p.get_clamped(-5, 9), 10.0);
+        assert!(Plane::from_vec(2, 2, vec![0u8; 3]).is_none());
+        let m = p.threshold(11.0);
+        assert_eq!(m.count(), 2);
+    }
+}

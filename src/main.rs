@@ -1,0 +1,39 @@
+//! The `fluidymation` command line: a thin layer over the library.
+
+mod cli;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// Stylize vector animations with the moving appearance of real paint.
+#[derive(Parser, Debug)]
+#[command(name = "fluidymation", version, about, long_about = None)]
+struct Cli {
+    /// Print nothing but errors (no progress, no warnings).
+    #[arg(short, long, global = true)]
+    quiet: bool,
+    /// Print more detail (repeat for more).
+    #[arg(short, long, global = true, action = clap::ArgAction::Count)]
+    verbose: u8,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Print an animation's size, frames and layers; optionally write mask and guide previews.
+    Inspect(cli::inspect::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    cli::init_logging(cli.quiet, cli.verbose);
+    let ctx = cli::Ctx { quiet: cli.quiet, verbose: cli.verbose };
+    let result = match cli.command {
+        Command::Inspect(args) => cli::inspect::run(args, &ctx),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => cli::report_error(&err),
+    }
+}
