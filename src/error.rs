@@ -109,6 +109,13 @@ pub enum Error {
         /// The layers that exist.
         available: Vec<String>,
     },
+    /// A file the program wrote earlier (a checkpoint, a cache) cannot be used.
+    Corrupt {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong and what to do.
+        message: String,
+    },
     /// The work was cancelled through a progress callback.
     Cancelled,
 }
@@ -177,6 +184,7 @@ impl fmt::Display for Error {
             Error::UnknownLayer { name, available } => {
                 write!(f, "no layer named '{}'; layers: {}", name, list(available))
             }
+            Error::Corrupt { path, message } => write!(f, "'{}': {}", path.display(), message),
             Error::Cancelled => write!(f, "cancelled"),
         }
     }

@@ -23,6 +23,7 @@ pub mod guide;
 pub mod img;
 pub mod progress;
 pub mod seq;
+pub mod synth;
 
 pub use error::{Error, Result};
 pub use progress::{NoProgress, Progress};

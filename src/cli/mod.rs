@@ -1,6 +1,9 @@
 //! Command implementations; each subcommand has its own file with its `Args` and `run`.
 
 pub mod inspect;
+pub mod params;
+pub mod progress;
+pub mod synth;
 
 use std::io::Write;
 use std::process::ExitCode;
@@ -60,4 +63,14 @@ pub fn report_error(err: &anyhow::Error) -> ExitCode {
     let cancelled =
         err.chain().any(|c| matches!(c.downcast_ref::<fluidymation::Error>(), Some(fluidymation::Error::Cancelled)));
     if cancelled { ExitCode::from(130) } else { ExitCode::from(1) }
+}
+
+/// Finds an exemplar by name or folder path.
+pub fn find_exemplar(
+    key: &str,
+    _extra_dirs: &[std::path::PathBuf],
+) -> anyhow::Result<fluidymation::exemplar::Exemplar> {
+    use anyhow::Context;
+    let path = std::path::Path::new(key);
+    fluidymation::exemplar::Exemplar::load(path).with_context(|| format!("could not load exemplar '{}'", key))
 }

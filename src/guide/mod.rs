@@ -53,3 +53,23 @@ pub struct FrameGuides {
     /// Backward motion extent `I^ext−`, pixels.
     pub ext_neg: Plane<f32>,
 }
+
+// TEMPORARY stand-ins until the guide module lands (replaced at merge).
+impl FrameGuides {
+    /// Half-resolution guides (placeholder).
+    pub fn downsample2(&self) -> FrameGuides {
+        let mask = crate::img::downsample2(&self.mask.to_coverage()).threshold(0.5);
+        FrameGuides {
+            mask,
+            dist: crate::img::downsample2(&self.dist),
+            flow: crate::img::downsample2(&self.flow),
+            ext_pos: crate::img::downsample2(&self.ext_pos),
+            ext_neg: crate::img::downsample2(&self.ext_neg),
+        }
+    }
+}
+
+/// Placeholder.
+pub fn compute_sequence(_masks: &[Plane<f32>], _p: &GuideParams) -> crate::error::Result<Vec<FrameGuides>> {
+    Err(crate::error::Error::Cancelled)
+}

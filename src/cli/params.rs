@@ -1,0 +1,176 @@
+//! Synthesis flags shared by `synth` and `render` (the thesis's parameter names).
+
+use anyhow::{Context, Result, bail};
+use fluidymation::synth::{Params, ParamsBuilder};
+
+/// Parses "6,4" into [6, 4].
+fn parse_list(name: &str, s: &str) -> Result<Vec<usize>> {
+    s.split(',')
+        .map(|t| {
+            t.trim().parse::<usize>().with_context(|| format!("--{}: '{}' is not a list of counts like 6,4", name, s))
+        })
+        .collect()
+}
+
+/// The engine's parameters as command-line flags. Unset flags keep the defaults (and, for
+/// border width, scale and speed, the exemplar's recommendations).
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct SynthFlags {
+    /// Seed of every random choice (same seed + input = same output).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Weight of the border channel w_df (w^bound) [default: 5].
+    #[arg(long, value_name = "W")]
+    pub dist_weight: Option<f32>,
+    /// Weight of the motion-extent channels w_ext [default: 0.1].
+    #[arg(long, value_name = "W")]
+    pub flow_weight: Option<f32>,
+    /// Weight of the temporal guide w_prev (w^temp) [default: 1].
+    #[arg(long, value_name = "W")]
+    pub prev_weight: Option<f32>,
+    /// Uniformity weight λ [default: 2].
+    #[arg(long, value_name = "L")]
+    pub lambda: Option<f32>,
+    /// Temporal radius r of the occurrence boxes, frames [default: 5].
+    #[arg(long, value_name = "R")]
+    pub occ_radius: Option<usize>,
+    /// Border width b, exemplar pixels [default: the exemplar's recommendation].
+    #[arg(long, value_name = "PX")]
+    pub border_width: Option<f32>,
+    /// σ of the spatial mask blur, pixels [default: 8].
+    #[arg(long, value_name = "PX")]
+    pub blur_sigma: Option<f32>,
+    /// σ of the temporal distance-field blur, frames [default: 2].
+    #[arg(long, value_name = "FRAMES")]
+    pub time_blur_sigma: Option<f32>,
+    /// PatchMatch iterations per level, coarsest first; the last repeats [default: 6,4].
+    #[arg(long, value_name = "LIST")]
+    pub patchmatch_iterations: Option<String>,
+    /// EM iterations per level, coarsest first; the last repeats [default: 4,2,1].
+    #[arg(long, value_name = "LIST")]
+    pub opt_iterations: Option<String>,
+    /// Exemplar frame step [default: the exemplar's recommendation].
+    #[arg(long, value_name = "N")]
+    pub src_speed: Option<usize>,
+    /// Exemplar scale [default: the exemplar's recommendation].
+    #[arg(long, value_name = "F")]
+    pub src_scale: Option<f32>,
+    /// Target scale; the output has the scaled size [default: 1].
+    #[arg(long, value_name = "F")]
+    pub target_scale: Option<f32>,
+    /// Temporal modulation bounds "m_u,m_l" in pixels, as in the thesis [default: 10,2].
+    #[arg(long, value_name = "MU,ML")]
+    pub prev_modulation_bounds: Option<String>,
+    /// Also optimize the finest pyramid level (slower; the thesis only votes it).
+    #[arg(long)]
+    pub optimize_finest: bool,
+}
+
+impl SynthFlags {
+    /// The validated parameters.
+    pub fn params(&self) -> Result<Params> {
+        let mut b: ParamsBuilder = Params::builder().seed(self.seed).optimize_finest(self.optimize_finest);
+        if let Some(v) = self.dist_weight {
+            b = b.w_df(v);
+        }
+        if let Some(v) = self.flow_weight {
+            b = b.w_ext(v);
+        }
+        if let Some(v) = self.prev_weight {
+            b = b.w_prev(v);
+        }
+        if let Some(v) = self.lambda {
+            b = b.lambda(v);
+        }
+        if let Some(v) = self.occ_radius {
+            b = b.occ_radius(v);
+        }
+        if let Some(v) = self.border_width {
+            b = b.border_width(v);
+        }
+        if let Some(v) = self.blur_sigma {
+            b = b.blur_sigma(v);
+        }
+        if let Some(v) = self.time_blur_sigma {
+            b = b.time_blur_sigma(v);
+        }
+        if let Some(s) = &self.patchmatch_iterations {
+            b = b.pm_iters(parse_list("patchmatch-iterations", s)?);
+        }
+        if let Some(s) = &self.opt_iterations {
+            b = b.opt_iters(parse_list("opt-iterations", s)?);
+        }
+        if let Some(v) = self.src_speed {
+            b = b.src_speed(v);
+        }
+        if let Some(v) = self.src_scale {
+            b = b.src_scale(v);
+        }
+        if let Some(v) = self.target_scale {
+            b = b.target_scale(v);
+        }
+        if let Some(s) = &self.prev_modulation_bounds {
+            let v: Vec<f32> = s.split(',').filter_map(|t| t.trim().parse().ok()).collect();
+            if v.len() != 2 {
+                bail!("--prev-modulation-bounds: '{}' must be two numbers m_u,m_l (e.g. 10,2)", s);
+            }
+            b = b.prev_bounds(v[1], v[0]);
+        }
+        Ok(b.build()?)
+    }
+}
+
+/// Parses a 1-based inclusive frame range "A..B", "A..", "..B" or "N" into a 0-based range
+/// clipped to `0..total`.
+pub fn parse_frames(spec: Option<&str>, total: usize) -> Result<std::ops::Range<usize>> {
+    let Some(spec) = spec else { return Ok(0..total) };
+    let bad = || anyhow::anyhow!("--frames '{}': expected A..B (1-based, inclusive), e.g. 1..24", spec);
+    let (a, b) = match spec.split_once("..") {
+        Some((a, b)) => (a.trim(), b.trim()),
+        None => (spec.trim(), spec.trim()),
+    };
+    let a: usize = if a.is_empty() { 1 } else { a.parse().map_err(|_| bad())? };
+    let b: usize = if b.is_empty() { total } else { b.parse().map_err(|_| bad())? };
+    if a == 0 || b < a {
+        return Err(bad());
+    }
+    if a > total {
+        bail!("--frames '{}': the input has only {} frames", spec, total);
+    }
+    Ok(a - 1..b.min(total))
+}
+
+/// Sets the global thread count.
+pub fn set_threads(threads: Option<usize>) -> Result<()> {
+    if let Some(n) = threads {
+        if n == 0 || n > 1024 {
+            bail!("--threads {}: expected 1..=1024", n);
+        }
+        rayon::ThreadPoolBuilder::new().num_threads(n).build_global().context("could not start the thread pool")?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frames_ranges() {
+        assert_eq!(parse_frames(Some("2..4"), 10).unwrap(), 1..4);
+        assert_eq!(parse_frames(Some("3"), 10).unwrap(), 2..3);
+        assert_eq!(parse_frames(Some("5.."), 10).unwrap(), 4..10);
+        assert_eq!(parse_frames(Some("..100"), 10).unwrap(), 0..10);
+        assert!(parse_frames(Some("0..3"), 10).is_err());
+        assert!(parse_frames(Some("11..12"), 10).is_err());
+        assert!(parse_frames(Some("x"), 10).is_err());
+    }
+
+    #[test]
+    fn thesis_order_of_bounds() {
+        let f = SynthFlags { prev_modulation_bounds: Some("10,2".into()), ..Default::default() };
+        assert_eq!(f.params().unwrap().prev_bounds(), (2.0, 10.0));
+        let f = SynthFlags { patchmatch_iterations: Some("6,x".into()), ..Default::default() };
+        assert!(f.params().is_err());
+    }
+}

@@ -1,0 +1,101 @@
+//! `fluidymation synth`: the engine on a plain mask sequence, as the thesis's program ran.
+
+use super::Ctx;
+use super::params::{SynthFlags, parse_frames, set_threads};
+use super::progress::Bars;
+use anyhow::{Context, Result, bail};
+use fluidymation::anim::{self, LoadOptions};
+use fluidymation::guide::GuideStream;
+use fluidymation::img::{self, Plane};
+use fluidymation::synth::{Source, Synthesizer};
+use std::path::PathBuf;
+
+/// Arguments of `synth`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Style exemplar: a name (see `fluidymation exemplar list`) or a folder.
+    #[arg(long, short = 'e')]
+    pub exemplar: String,
+    /// Directory (or glob) of target mask PNGs, white = paint.
+    #[arg(long)]
+    pub masks: PathBuf,
+    /// Output directory for RGBA frames (exemplar colors, alpha = the target mask).
+    #[arg(long, short = 'o')]
+    pub output: PathBuf,
+    /// Frames to synthesize, 1-based inclusive (e.g. 1..24). Guides still use every frame.
+    #[arg(long)]
+    pub frames: Option<String>,
+    /// Worker threads [default: all cores]. The output does not depend on it.
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Also write the field (frame index and position as colors) and Ω per frame here.
+    #[arg(long, value_name = "DIR")]
+    pub debug: Option<PathBuf>,
+    /// Extra directories to look for exemplars by name.
+    #[arg(long, value_name = "DIR")]
+    pub exemplar_dir: Vec<PathBuf>,
+    #[command(flatten)]
+    pub flags: SynthFlags,
+}
+
+/// Runs `synth`.
+pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
+    set_threads(args.threads)?;
+    let params = args.flags.params()?;
+    let exemplar = super::find_exemplar(&args.exemplar, &args.exemplar_dir)?;
+    let anim = anim::load(&args.masks, &LoadOptions { scale: params.target_scale(), ..Default::default() })
+        .with_context(|| format!("could not read the masks in '{}'", args.masks.display()))?;
+    let range = parse_frames(args.frames.as_deref(), anim.frames)?;
+    for dir in std::iter::once(&args.output).chain(args.debug.as_ref()) {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("could not create the output directory '{}'", dir.display()))?;
+    }
+    let bars = Bars::new(ctx.quiet, anim.frames as u64);
+    let source = Source::prepare(&exemplar, &params)
+        .with_context(|| format!("could not prepare exemplar '{}'", exemplar.meta.name))?;
+    let mut synth = Synthesizer::new(source, params.clone())?;
+    synth.set_debug(args.debug.is_some());
+    let masks_anim = &anim;
+    let stream = GuideStream::new(anim.frames, |i| Ok(masks_anim.render(0, i)?.coverage()), params.guide())
+        .context("could not compute the target guides")?;
+    let start = std::time::Instant::now();
+    let mut written = 0;
+    for (k, g) in stream.enumerate() {
+        if k >= range.end {
+            break;
+        }
+        let g = g.with_context(|| format!("could not compute the guides of frame {}", k + 1))?;
+        let out = synth.step(&g).with_context(|| format!("synthesis failed at frame {}", k + 1))?;
+        bars.set_message(format!("frame {}", k + 1));
+        bars.inc(1);
+        if k < range.start {
+            continue;
+        }
+        let rgba = Plane::from_fn(out.rgb.width(), out.rgb.height(), |x, y| {
+            let c = out.rgb.get(x, y);
+            [c[0], c[1], c[2], if out.mask.get(x, y) { 1.0 } else { 0.0 }]
+        });
+        img::save_rgba(&args.output.join(format!("{:04}.png", k + 1)), &rgba)?;
+        if let (Some(dir), Some(d)) = (&args.debug, &out.debug) {
+            img::save_rgb(&dir.join(format!("nnf_{:04}.png", k + 1)), &d.nnf)?;
+            let max = d.omega.data().iter().cloned().fold(1e-6f32, f32::max);
+            img::save_gray(&dir.join(format!("omega_{:04}.png", k + 1)), &d.omega.map(|v| v / max))?;
+        }
+        written += 1;
+    }
+    bars.finish();
+    if written == 0 {
+        bail!("no frame was synthesized");
+    }
+    if !ctx.quiet {
+        let secs = start.elapsed().as_secs_f64();
+        eprintln!(
+            "{} frames in {:.1} s ({:.2} s/frame) -> {}",
+            written,
+            secs,
+            secs / written as f64,
+            args.output.display()
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,181 @@
+//! Saving and restoring the state a synthesizer carries between frames (the previous frame's
+//! field, its `T^ext+` and masks), so an interrupted render can resume and give the same
+//! result as an uninterrupted one. Ω needs no saving: it is recomputed for every frame.
+
+use super::nnf::{Match, Nnf};
+use super::{PrevState, Synthesizer};
+use crate::error::{Error, Result};
+use std::path::Path;
+
+const MAGIC: &[u8; 8] = b"FMSYNTH2";
+
+struct Writer(Vec<u8>);
+
+impl Writer {
+    fn u64(&mut self, v: u64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn f32(&mut self, v: f32) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn bytes(&mut self, b: &[u8]) {
+        self.u64(b.len() as u64);
+        self.0.extend_from_slice(b);
+    }
+}
+
+struct Reader<'a> {
+    data: &'a [u8],
+    pos: usize,
+}
+
+impl Reader<'_> {
+    fn take(&mut self, n: usize) -> Option<&[u8]> {
+        let end = self.pos.checked_add(n)?;
+        let s = self.data.get(self.pos..end)?;
+        self.pos = end;
+        Some(s)
+    }
+    fn u64(&mut self) -> Option<u64> {
+        Some(u64::from_le_bytes(self.take(8)?.try_into().ok()?))
+    }
+    fn f32(&mut self) -> Option<f32> {
+        Some(f32::from_le_bytes(self.take(4)?.try_into().ok()?))
+    }
+    fn len(&mut self, limit: usize) -> Option<usize> {
+        let n = self.u64()? as usize;
+        (n <= limit).then_some(n)
+    }
+}
+
+impl Synthesizer {
+    /// A string that changes whenever the parameters or the exemplar preparation change;
+    /// a checkpoint only restores into a synthesizer with the same fingerprint.
+    pub fn fingerprint(&self) -> String {
+        let src = &self.source.pyramid;
+        format!(
+            "{:?}|{}x{}x{}|b={}|paper={:?}",
+            self.params, src.size.0, src.size.1, src.levels[0].frames, src.border_width, src.paper
+        )
+    }
+
+    /// Serializes the inter-frame state.
+    pub fn save_state(&self) -> Vec<u8> {
+        let mut w = Writer(Vec::new());
+        w.0.extend_from_slice(MAGIC);
+        w.bytes(self.fingerprint().as_bytes());
+        w.u64(self.frame as u64);
+        let (sw, sh) = self.size.unwrap_or((0, 0));
+        w.u64(sw as u64);
+        w.u64(sh as u64);
+        match &self.prev {
+            None => w.u64(0),
+            Some(p) => {
+                w.u64(1);
+                w.u64(p.nnf0.w as u64);
+                w.u64(p.nnf0.h as u64);
+                // Sparse: a bit per pixel, then the matches (and T^ext+) of the set bits only.
+                let ok: Vec<bool> = p.nnf0.data.iter().map(|m| m.ok).collect();
+                w.bytes(&pack_bits(&ok));
+                for (m, &e) in p.nnf0.data.iter().zip(&p.ext_pos) {
+                    if !m.ok {
+                        continue;
+                    }
+                    for v in [m.x, m.y, m.c, m.s, m.err, e] {
+                        w.f32(v);
+                    }
+                    w.0.extend_from_slice(&m.i.to_le_bytes());
+                    w.0.push(m.flip as u8);
+                }
+                w.u64(p.masks.len() as u64);
+                for m in &p.masks {
+                    w.u64(m.len() as u64);
+                    w.bytes(&pack_bits(m));
+                }
+            }
+        }
+        w.0
+    }
+
+    /// Restores state saved by [`Synthesizer::save_state`] into a synthesizer built with the
+    /// same source and parameters. `path` only names the file in errors.
+    pub fn load_state(&mut self, data: &[u8], path: &Path) -> Result<()> {
+        let bad = |what: &str| Error::Corrupt {
+            path: path.to_path_buf(),
+            message: format!("checkpoint is unusable: {}", what),
+        };
+        let mut r = Reader { data, pos: 0 };
+        if r.take(8) != Some(MAGIC.as_slice()) {
+            return Err(bad("not a fluidymation checkpoint"));
+        }
+        let n = r.len(1 << 20).ok_or_else(|| bad("truncated"))?;
+        let fp = r.take(n).ok_or_else(|| bad("truncated"))?;
+        if fp != self.fingerprint().as_bytes() {
+            return Err(bad("it was made with other parameters or another exemplar; start again without --resume"));
+        }
+        let limit = 1 << 28;
+        let trunc = || bad("truncated");
+        let frame = r.u64().ok_or_else(trunc)? as usize;
+        let sw = r.len(limit).ok_or_else(trunc)?;
+        let sh = r.len(limit).ok_or_else(trunc)?;
+        let prev = match r.u64().ok_or_else(trunc)? {
+            0 => None,
+            _ => {
+                let w = r.len(1 << 16).ok_or_else(trunc)?;
+                let h = r.len(1 << 16).ok_or_else(trunc)?;
+                let n = r.len(limit).ok_or_else(trunc)?;
+                let ok = unpack_bits(r.take(n).ok_or_else(trunc)?, w * h).ok_or_else(|| bad("inconsistent sizes"))?;
+                let mut nnf = Nnf::new(w, h);
+                let mut ext_pos = vec![0.0f32; w * h];
+                for ((m, e), &ok) in nnf.data.iter_mut().zip(ext_pos.iter_mut()).zip(&ok) {
+                    if !ok {
+                        continue;
+                    }
+                    let mut v = [0.0f32; 6];
+                    for x in v.iter_mut() {
+                        *x = r.f32().ok_or_else(trunc)?;
+                    }
+                    let rest = r.take(3).ok_or_else(trunc)?;
+                    *m = Match {
+                        x: v[0],
+                        y: v[1],
+                        c: v[2],
+                        s: v[3],
+                        err: v[4],
+                        i: u16::from_le_bytes([rest[0], rest[1]]),
+                        flip: rest[2] != 0,
+                        ok: true,
+                    };
+                    *e = v[5];
+                    if m.i as usize >= self.source.frames() || !(m.x.is_finite() && m.y.is_finite()) {
+                        return Err(bad("a match points outside the exemplar"));
+                    }
+                }
+                let levels = r.len(32).ok_or_else(trunc)?;
+                let mut masks = Vec::with_capacity(levels);
+                for _ in 0..levels {
+                    let len = r.len(limit).ok_or_else(trunc)?;
+                    let n = r.len(limit).ok_or_else(trunc)?;
+                    masks
+                        .push(unpack_bits(r.take(n).ok_or_else(trunc)?, len).ok_or_else(|| bad("inconsistent sizes"))?);
+                }
+                Some(PrevState { nnf0: nnf, ext_pos, masks })
+            }
+        };
+        if r.pos != data.len() {
+            return Err(bad("trailing data"));
+        }
+        self.frame = frame;
+        self.size = (sw > 0).then_some((sw, sh));
+        self.prev = prev;
+        Ok(())
+    }
+}
+
+fn pack_bits(bits: &[bool]) -> Vec<u8> {
+    bits.chunks(8).map(|c| c.iter().enumerate().fold(0u8, |acc, (k, &b)| acc | ((b as u8) << k))).collect()
+}
+
+fn unpack_bits(bytes: &[u8], n: usize) -> Option<Vec<bool>> {
+    (bytes.len() == n.div_ceil(8)).then(|| (0..n).map(|k| bytes[k / 8] >> (k % 8) & 1 != 0).collect())
+}

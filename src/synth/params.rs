@@ -1,0 +1,375 @@
+//! Synthesis parameters as a validated builder.
+//!
+//! Where the paper (Table 1) and the thesis (§4.5, CLI table) disagree, each setter says which
+//! one the default follows and why.
+
+use crate::error::{Error, Result};
+use crate::guide::GuideParams;
+
+/// Patch size n (fixed at compile time, as in the thesis §4.4.1: 5 × 5).
+pub const PATCH: usize = 5;
+/// ⌊n/2⌋.
+pub const HALF: usize = PATCH / 2;
+
+/// All tunable parameters of the synthesis. Build with [`Params::builder`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Params {
+    pub(crate) border_width: Option<f32>,
+    pub(crate) w_df: f32,
+    pub(crate) w_ext: f32,
+    pub(crate) w_prev: f32,
+    pub(crate) w_color: f32,
+    pub(crate) lambda: f32,
+    pub(crate) occ_radius: usize,
+    pub(crate) prev_bounds: (f32, f32),
+    pub(crate) alpha: f32,
+    pub(crate) pm_iters: Vec<usize>,
+    pub(crate) opt_iters: Vec<usize>,
+    pub(crate) optimize_finest: bool,
+    pub(crate) levels: Option<usize>,
+    pub(crate) src_scale: Option<f32>,
+    pub(crate) src_speed: Option<usize>,
+    pub(crate) target_scale: f32,
+    pub(crate) direction_rule: bool,
+    pub(crate) ext_clamp: bool,
+    pub(crate) seed: u64,
+    pub(crate) guide: GuideParams,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Params {
+            border_width: None,
+            w_df: 5.0,
+            w_ext: 0.1,
+            w_prev: 1.0,
+            w_color: 1.0,
+            lambda: 2.0,
+            occ_radius: 5,
+            prev_bounds: (2.0, 10.0),
+            alpha: 0.75,
+            pm_iters: vec![6, 4],
+            opt_iters: vec![4, 2, 1],
+            optimize_finest: false,
+            levels: None,
+            src_scale: None,
+            src_speed: None,
+            target_scale: 1.0,
+            direction_rule: true,
+            ext_clamp: true,
+            seed: 1,
+            guide: GuideParams::default(),
+        }
+    }
+}
+
+impl Params {
+    /// A builder starting from the defaults.
+    pub fn builder() -> ParamsBuilder {
+        ParamsBuilder { p: Params::default() }
+    }
+
+    /// Border width b in pixels, when set explicitly (else the exemplar's recommendation).
+    pub fn border_width(&self) -> Option<f32> {
+        self.border_width
+    }
+    /// Weight of the border channel w_df (w^bound).
+    pub fn w_df(&self) -> f32 {
+        self.w_df
+    }
+    /// Weight of the motion-extent channels w_ext.
+    pub fn w_ext(&self) -> f32 {
+        self.w_ext
+    }
+    /// Weight of the temporal guide w_prev (w^temp).
+    pub fn w_prev(&self) -> f32 {
+        self.w_prev
+    }
+    /// Uniformity weight λ (w^uni).
+    pub fn lambda(&self) -> f32 {
+        self.lambda
+    }
+    /// Temporal radius r of the occurrence boxes.
+    pub fn occ_radius(&self) -> usize {
+        self.occ_radius
+    }
+    /// Bounds (m_l, m_u) of the temporal modulation, pixels.
+    pub fn prev_bounds(&self) -> (f32, f32) {
+        self.prev_bounds
+    }
+    /// The seed.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+    /// Target scale.
+    pub fn target_scale(&self) -> f32 {
+        self.target_scale
+    }
+    /// Exemplar scale, when set explicitly (else the exemplar's recommendation).
+    pub fn src_scale(&self) -> Option<f32> {
+        self.src_scale
+    }
+    /// Exemplar speed (frame step), when set explicitly (else the exemplar's recommendation).
+    pub fn src_speed(&self) -> Option<usize> {
+        self.src_speed
+    }
+    /// Guide computation parameters.
+    pub fn guide(&self) -> &GuideParams {
+        &self.guide
+    }
+
+    /// PatchMatch iterations at pyramid level `l` counted from the coarsest (0 = coarsest).
+    pub(crate) fn pm_iters_at(&self, from_coarsest: usize) -> usize {
+        *self.pm_iters.get(from_coarsest).or(self.pm_iters.last()).unwrap_or(&4)
+    }
+
+    /// EM (optimize) iterations at pyramid level `l` counted from the coarsest.
+    pub(crate) fn opt_iters_at(&self, from_coarsest: usize) -> usize {
+        *self.opt_iters.get(from_coarsest).or(self.opt_iters.last()).unwrap_or(&1)
+    }
+}
+
+/// Builds [`Params`]; [`ParamsBuilder::build`] validates every value.
+#[derive(Clone, Debug)]
+pub struct ParamsBuilder {
+    p: Params,
+}
+
+impl ParamsBuilder {
+    /// Border width b (thesis `--border-width`), pixels of the (scaled) exemplar: the band along
+    /// the mask edge where edge effects live; `I^df = min(I^dist / b, 1)`; patches only match
+    /// within the same segment (border `I^df < 1` or interior `I^df = 1`).
+    /// Default: the exemplar's recommendation from `exemplar.toml` (thesis default 10).
+    pub fn border_width(mut self, b: f32) -> Self {
+        self.p.border_width = Some(b);
+        self
+    }
+
+    /// Weight w_df of the border channel (thesis `--dist-weight`, paper w^bound).
+    /// Default: 5 (thesis; the paper's 4 is with b = 30 px).
+    pub fn w_df(mut self, w: f32) -> Self {
+        self.p.w_df = w;
+        self
+    }
+
+    /// Weight w_ext of the motion-extent channels ext+ and ext− (thesis `--flow-weight`).
+    /// Default: 0.1 (thesis; the paper uses 0.25).
+    pub fn w_ext(mut self, w: f32) -> Self {
+        self.p.w_ext = w;
+        self
+    }
+
+    /// Weight w_prev of the temporal guide (thesis `--prev-weight`, paper w^temp).
+    /// Default: 1 (thesis; the paper uses 4 — the thesis notes lower values trade
+    /// high-frequency flicker for occasional jumps).
+    pub fn w_prev(mut self, w: f32) -> Self {
+        self.p.w_prev = w;
+        self
+    }
+
+    /// Weight of the color term D^tex; only for ablations (0 disables it). Default: 1.
+    pub fn w_color(mut self, w: f32) -> Self {
+        self.p.w_color = w;
+        self
+    }
+
+    /// Uniformity weight λ (thesis `--lambda`, paper w^uni) of Ω(p') = Ω*(p')/(n²ω*).
+    /// Default: 2 (thesis; paper 1).
+    pub fn lambda(mut self, l: f32) -> Self {
+        self.p.lambda = l;
+        self
+    }
+
+    /// Temporal radius r of the n × n × (2r+1) occurrence boxes (thesis `--occ-radius`).
+    /// Default: 5 (paper Table 1; the thesis's 10 covers most of a 20–30 frame exemplar, which
+    /// makes the penalty nearly frame-blind).
+    pub fn occ_radius(mut self, r: usize) -> Self {
+        self.p.occ_radius = r;
+        self
+    }
+
+    /// Bounds (m_l, m_u) in pixels of the temporal modulation m(q): full temporal weight where
+    /// the edge distances of target and source differ by at most m_l, none beyond m_u (thesis
+    /// `--prev-modulation-bounds 10,2`, given there as (m_u, m_l)). Distances are compared after
+    /// clamping both to b, as the thesis compares `I^df`. Default: (2, 10).
+    pub fn prev_bounds(mut self, m_l: f32, m_u: f32) -> Self {
+        self.p.prev_bounds = (m_l, m_u);
+        self
+    }
+
+    /// PatchMatch random-search shrink factor α (thesis `--patchmatch-alpha`). Default: 0.75.
+    pub fn alpha(mut self, a: f32) -> Self {
+        self.p.alpha = a;
+        self
+    }
+
+    /// PatchMatch iterations per level, coarsest first; the last repeats
+    /// (thesis `--patchmatch-iterations`). Default: [6, 4] (thesis §4.4.3).
+    pub fn pm_iters(mut self, v: Vec<usize>) -> Self {
+        self.p.pm_iters = v;
+        self
+    }
+
+    /// EM iterations per level, coarsest first; the last repeats (thesis `--opt-iterations`).
+    /// Default: [4, 2, 1] (thesis §4.4.3 table).
+    pub fn opt_iters(mut self, v: Vec<usize>) -> Self {
+        self.p.opt_iters = v;
+        self
+    }
+
+    /// Also optimize the finest pyramid level instead of only voting the up-scaled field
+    /// (thesis §4.4.3 skips it). Default: false.
+    pub fn optimize_finest(mut self, on: bool) -> Self {
+        self.p.optimize_finest = on;
+        self
+    }
+
+    /// Number of pyramid levels. Default: ⌊log2(d_min / n)⌋ (paper §3.6).
+    pub fn levels(mut self, l: usize) -> Self {
+        self.p.levels = Some(l);
+        self
+    }
+
+    /// Exemplar scale (thesis `--src-scale`). Default: the exemplar's recommendation (1).
+    pub fn src_scale(mut self, s: f32) -> Self {
+        self.p.src_scale = Some(s);
+        self
+    }
+
+    /// Exemplar speed: step between used exemplar frames (thesis `--src-speed`).
+    /// Default: the exemplar's recommendation (1).
+    pub fn src_speed(mut self, s: usize) -> Self {
+        self.p.src_speed = Some(s);
+        self
+    }
+
+    /// Target scale (thesis `--target-scale`); the output has the scaled size. Default: 1.
+    pub fn target_scale(mut self, s: f32) -> Self {
+        self.p.target_scale = s;
+        self
+    }
+
+    /// The flow-alignment rule for θ (paper §3.2, thesis §4.3): rotations that align source
+    /// and target flow. Off = θ = 0 everywhere (the "no direction term" ablation).
+    /// Default: on.
+    pub fn direction_rule(mut self, on: bool) -> Self {
+        self.p.direction_rule = on;
+        self
+    }
+
+    /// Clamp target motion extents to the exemplar's largest (so long target motions do not
+    /// all collapse onto the exemplar's few most-moved pixels). Default: on.
+    pub fn ext_clamp(mut self, on: bool) -> Self {
+        self.p.ext_clamp = on;
+        self
+    }
+
+    /// Seed of every random choice. Default: 1.
+    pub fn seed(mut self, s: u64) -> Self {
+        self.p.seed = s;
+        self
+    }
+
+    /// σ of the spatial mask blur (thesis `--blur-sigma`), pixels. Default: 8.
+    pub fn blur_sigma(mut self, s: f32) -> Self {
+        self.p.guide.blur_sigma = s;
+        self
+    }
+
+    /// σ of the temporal distance-field blur (thesis `--time-blur-sigma`), frames. Default: 2.
+    pub fn time_blur_sigma(mut self, s: f32) -> Self {
+        self.p.guide.time_blur_sigma = s;
+        self
+    }
+
+    /// Replaces all guide parameters.
+    pub fn guide(mut self, g: GuideParams) -> Self {
+        self.p.guide = g;
+        self
+    }
+
+    /// Validates and returns the parameters.
+    pub fn build(self) -> Result<Params> {
+        let p = self.p;
+        let finite_nonneg = |name: &str, v: f32| {
+            if v.is_finite() && v >= 0.0 { Ok(()) } else { Err(Error::param(name, v, "a finite number >= 0")) }
+        };
+        finite_nonneg("dist-weight", p.w_df)?;
+        finite_nonneg("flow-weight", p.w_ext)?;
+        finite_nonneg("prev-weight", p.w_prev)?;
+        finite_nonneg("color-weight", p.w_color)?;
+        finite_nonneg("lambda", p.lambda)?;
+        if let Some(b) = p.border_width
+            && !(b.is_finite() && b > 0.0 && b <= 10_000.0)
+        {
+            return Err(Error::param("border-width", b, "a number of pixels in (0, 10000]"));
+        }
+        if p.occ_radius > 1000 {
+            return Err(Error::param("occ-radius", p.occ_radius, "0..=1000 frames"));
+        }
+        let (ml, mu) = p.prev_bounds;
+        if !(ml.is_finite() && mu.is_finite() && ml >= 0.0 && mu > ml) {
+            return Err(Error::param("prev-modulation-bounds", format!("{},{}", ml, mu), "0 <= m_l < m_u (pixels)"));
+        }
+        if !(p.alpha > 0.0 && p.alpha < 1.0) {
+            return Err(Error::param("patchmatch-alpha", p.alpha, "a number in (0, 1)"));
+        }
+        for (name, v) in [("patchmatch-iterations", &p.pm_iters), ("opt-iterations", &p.opt_iters)] {
+            if v.is_empty() || v.iter().any(|&n| n > 1000) {
+                return Err(Error::param(
+                    name,
+                    format!("{:?}", v),
+                    "a non-empty comma-separated list of counts (each <= 1000)",
+                ));
+            }
+        }
+        if let Some(l) = p.levels
+            && !(1..=16).contains(&l)
+        {
+            return Err(Error::param("levels", l, "1..=16"));
+        }
+        if let Some(s) = p.src_scale
+            && !(s.is_finite() && s > 0.01 && s <= 16.0)
+        {
+            return Err(Error::param("src-scale", s, "a number in (0.01, 16]"));
+        }
+        if let Some(s) = p.src_speed
+            && !(1..=1000).contains(&s)
+        {
+            return Err(Error::param("src-speed", s, "1..=1000"));
+        }
+        if !(p.target_scale.is_finite() && p.target_scale > 0.01 && p.target_scale <= 16.0) {
+            return Err(Error::param("target-scale", p.target_scale, "a number in (0.01, 16]"));
+        }
+        let g = &p.guide;
+        if !(g.blur_sigma.is_finite() && (0.0..=200.0).contains(&g.blur_sigma)) {
+            return Err(Error::param("blur-sigma", g.blur_sigma, "0..=200 pixels"));
+        }
+        if !(g.time_blur_sigma.is_finite() && (0.0..=100.0).contains(&g.time_blur_sigma)) {
+            return Err(Error::param("time-blur-sigma", g.time_blur_sigma, "0..=100 frames"));
+        }
+        if !(g.mask_threshold > 0.0 && g.mask_threshold < 1.0) {
+            return Err(Error::param("mask-threshold", g.mask_threshold, "a number in (0, 1)"));
+        }
+        Ok(p)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_validate_and_bad_values_are_named() {
+        let p = Params::builder().build().unwrap();
+        assert_eq!(p.pm_iters_at(0), 6);
+        assert_eq!(p.pm_iters_at(7), 4);
+        assert_eq!(p.opt_iters_at(1), 2);
+        let e = Params::builder().lambda(f32::NAN).build().unwrap_err().to_string();
+        assert!(e.contains("lambda"), "{e}");
+        let e = Params::builder().prev_bounds(10.0, 2.0).build().unwrap_err().to_string();
+        assert!(e.contains("prev-modulation-bounds"), "{e}");
+        assert!(Params::builder().alpha(1.0).build().is_err());
+        assert!(Params::builder().pm_iters(vec![]).build().is_err());
+    }
+}

@@ -1,0 +1,305 @@
+//! The exemplar S laid out for the hot loop: per pyramid level, all frames' features in one
+//! padded array of 8-lane pixels, so that a bilinear tap is four 32-byte loads.
+//!
+//! Lanes: `[r, g, b, √w_df·S^df, √w_ext·S^ext+, √w_ext·S^ext−, 0, 0]` — the guide channels
+//! are pre-multiplied by the square roots of their weights, so the patch error is a plain sum
+//! of squared differences over lanes (see [`super::patch`]).
+
+use super::params::{HALF, Params};
+use crate::guide::FrameGuides;
+use crate::img::{self, Plane, Rgb};
+use glam::Vec2;
+
+/// Lanes per pixel.
+pub(crate) const LANES: usize = 8;
+/// One pixel's features.
+pub(crate) type Feat = [f32; LANES];
+/// Padding around every source frame: rotated windows around a valid center (≥ `MARGIN` px
+/// from the border) plus the bilinear neighbour never leave the padded frame.
+pub(crate) const PAD: usize = 4;
+/// Smallest distance of a valid patch center from the frame border: ⌈√2·⌊n/2⌋⌉, so the
+/// rotated window lies inside the exemplar image.
+pub(crate) const MARGIN: usize = 3;
+
+/// Flow magnitude (pixels per frame) below which a flow direction is considered undefined.
+pub(crate) const FLOW_EPS: f32 = 0.02;
+
+/// Flag: a candidate patch center may sit here (inside the dilated mask, away from the border).
+pub(crate) const VALID: u8 = 1;
+/// Flag: interior segment (`I^df = 1`); otherwise border segment.
+pub(crate) const INTERIOR: u8 = 2;
+/// Flag: inside the (pre-processed) mask itself.
+pub(crate) const IN_MASK: u8 = 4;
+
+/// Per-pixel data not needed in the patch error's inner loop.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct PixInfo {
+    /// Unit flow direction (or (1, 0) where the flow is below [`FLOW_EPS`]).
+    pub dir: Vec2,
+    /// Signed distance to the mask edge, full-resolution pixels.
+    pub dist: f32,
+    /// ext+ in full-resolution pixels (unweighted).
+    pub ext_pos: f32,
+    /// ext− in full-resolution pixels (unweighted).
+    pub ext_neg: f32,
+    /// [`VALID`] | [`INTERIOR`] | [`IN_MASK`].
+    pub flags: u8,
+}
+
+/// Unit direction of a flow vector, with the stable fallback (1, 0) where it is tiny
+/// ("rotation where there is no motion", DESIGN pitfalls).
+#[inline]
+pub(crate) fn flow_dir(f: Vec2) -> Vec2 {
+    let m = f.length();
+    if m >= FLOW_EPS && m.is_finite() { f / m } else { Vec2::X }
+}
+
+/// Dilates a mask by a square of radius `r` (Chebyshev distance).
+pub(crate) fn dilate(mask: &Plane<bool>, r: usize) -> Plane<bool> {
+    let (w, h) = mask.size();
+    let mut tmp = Plane::new(w, h);
+    for y in 0..h {
+        let row = mask.row(y);
+        let mut last: isize = -(r as isize) - 1;
+        // forward then backward scan keeps it linear
+        let mut out = vec![false; w];
+        for x in 0..w {
+            if row[x] {
+                last = x as isize;
+            }
+            out[x] = x as isize - last <= r as isize;
+        }
+        let mut next: isize = isize::MAX / 2;
+        for x in (0..w).rev() {
+            if row[x] {
+                next = x as isize;
+            }
+            out[x] |= next - (x as isize) <= r as isize;
+        }
+        tmp.row_mut(y).copy_from_slice(&out);
+    }
+    let mut res = Plane::new(w, h);
+    for x in 0..w {
+        let mut last: isize = -(r as isize) - 1;
+        for y in 0..h {
+            if tmp.get(x, y) {
+                last = y as isize;
+            }
+            if y as isize - last <= r as isize {
+                res.set(x, y, true);
+            }
+        }
+        let mut next: isize = isize::MAX / 2;
+        for y in (0..h).rev() {
+            if tmp.get(x, y) {
+                next = y as isize;
+            }
+            if next - (y as isize) <= r as isize {
+                res.set(x, y, true);
+            }
+        }
+    }
+    res
+}
+
+/// One pyramid level of the exemplar.
+pub(crate) struct SourceLevel {
+    /// Frame width and height at this level (unpadded).
+    pub w: usize,
+    pub h: usize,
+    /// Number of frames l_S.
+    pub frames: usize,
+    /// Row stride of the padded frames.
+    pub stride: usize,
+    /// Pixels per padded frame.
+    pub frame_len: usize,
+    /// Features, padded (clamp-to-edge), frame after frame.
+    pub feat: Vec<Feat>,
+    /// Per-pixel info, same padded layout (padding is invalid).
+    pub info: Vec<PixInfo>,
+    /// Valid centers per segment (0 = border, 1 = interior), as padded indices.
+    pub valid: [Vec<u32>; 2],
+    /// |S_seg|: mask pixels per segment over all frames (for ω*).
+    pub seg_count: [usize; 2],
+}
+
+impl SourceLevel {
+    /// Padded index of pixel (x, y) of frame i.
+    #[inline]
+    pub fn index(&self, i: usize, x: usize, y: usize) -> usize {
+        i * self.frame_len + (y + PAD) * self.stride + x + PAD
+    }
+
+    /// Inverse of [`SourceLevel::index`]: (i, x, y).
+    #[inline]
+    pub fn coords(&self, idx: usize) -> (usize, usize, usize) {
+        let i = idx / self.frame_len;
+        let r = idx % self.frame_len;
+        (i, r % self.stride - PAD, r / self.stride - PAD)
+    }
+
+    /// The info at the pixel nearest to (x, y) in frame i, when inside the frame.
+    #[inline]
+    pub fn info_at(&self, i: usize, x: f32, y: f32) -> Option<(usize, &PixInfo)> {
+        let xi = (x + 0.5).floor();
+        let yi = (y + 0.5).floor();
+        if i >= self.frames || xi < 0.0 || yi < 0.0 || xi >= self.w as f32 || yi >= self.h as f32 {
+            return None;
+        }
+        let idx = self.index(i, xi as usize, yi as usize);
+        Some((idx, &self.info[idx]))
+    }
+
+    /// Bilinear sample of the rgb lanes at (x, y) of frame i (clamped to the padded frame).
+    #[inline]
+    pub fn sample_rgb(&self, i: usize, x: f32, y: f32) -> Rgb {
+        let px = (x + PAD as f32).clamp(0.0, (self.stride - 2) as f32);
+        let py = (y + PAD as f32).clamp(0.0, (self.frame_len / self.stride - 2) as f32);
+        let x0 = px as usize;
+        let y0 = py as usize;
+        let fx = px - x0 as f32;
+        let fy = py - y0 as f32;
+        let base = i * self.frame_len + y0 * self.stride + x0;
+        let p = |k: usize| &self.feat[k];
+        let mut out = [0.0; 3];
+        for (c, o) in out.iter_mut().enumerate() {
+            let top = p(base)[c] + (p(base + 1)[c] - p(base)[c]) * fx;
+            let bot = p(base + self.stride)[c] + (p(base + self.stride + 1)[c] - p(base + self.stride)[c]) * fx;
+            *o = top + (bot - top) * fy;
+        }
+        out
+    }
+}
+
+/// The exemplar's pyramid, shared by every layer synthesized with the same exemplar and
+/// parameters.
+pub struct SourcePyramid {
+    pub(crate) levels: Vec<SourceLevel>,
+    /// Largest |ext| over the exemplar (full-resolution pixels), for clamping target extents.
+    pub(crate) ext_max: f32,
+    /// Border width b actually used (pixels).
+    pub(crate) border_width: f32,
+    /// Mean color of the exemplar outside its masks (≈ the paper).
+    pub(crate) paper: Rgb,
+    /// Full-resolution frame size.
+    pub(crate) size: (usize, usize),
+}
+
+impl SourcePyramid {
+    /// Builds the pyramid of `levels` levels from the exemplar frames `S^rgb` and their guides.
+    pub(crate) fn build(
+        frames: &[Plane<Rgb>],
+        guides: &[FrameGuides],
+        params: &Params,
+        border_width: f32,
+        levels: usize,
+    ) -> SourcePyramid {
+        let sq_df = params.w_df.sqrt();
+        let sq_ext = params.w_ext.sqrt();
+        let mut ext_max: f32 = 0.0;
+        let mut paper = [0.0f64; 3];
+        let mut paper_n = 0usize;
+        for (f, g) in frames.iter().zip(guides) {
+            for (c, &m) in f.data().iter().zip(g.mask.data()) {
+                if !m {
+                    for k in 0..3 {
+                        paper[k] += c[k] as f64;
+                    }
+                    paper_n += 1;
+                }
+            }
+            for (&a, &b) in g.ext_pos.data().iter().zip(g.ext_neg.data()) {
+                ext_max = ext_max.max(a).max(b);
+            }
+        }
+        let paper = if paper_n > 0 {
+            [(paper[0] / paper_n as f64) as f32, (paper[1] / paper_n as f64) as f32, (paper[2] / paper_n as f64) as f32]
+        } else {
+            [1.0, 1.0, 1.0]
+        };
+        let mut cur_rgb: Vec<Plane<Rgb>> = frames.to_vec();
+        let mut cur_g: Vec<FrameGuides> = guides.to_vec();
+        let mut out = Vec::with_capacity(levels);
+        for l in 0..levels {
+            if l > 0 {
+                cur_rgb = cur_rgb.iter().map(img::downsample2).collect();
+                cur_g = cur_g.iter().map(|g| g.downsample2()).collect();
+            }
+            out.push(build_level(&cur_rgb, &cur_g, sq_df, sq_ext, border_width));
+        }
+        SourcePyramid { levels: out, ext_max, border_width, paper, size: frames[0].size() }
+    }
+
+    /// Number of levels.
+    pub fn levels(&self) -> usize {
+        self.levels.len()
+    }
+}
+
+fn build_level(rgb: &[Plane<Rgb>], guides: &[FrameGuides], sq_df: f32, sq_ext: f32, b: f32) -> SourceLevel {
+    let (w, h) = rgb[0].size();
+    let stride = w + 2 * PAD;
+    let frame_len = stride * (h + 2 * PAD);
+    let frames = rgb.len();
+    let mut feat = vec![[0.0f32; LANES]; frame_len * frames];
+    let mut info = vec![PixInfo::default(); frame_len * frames];
+    let mut valid: [Vec<u32>; 2] = [Vec::new(), Vec::new()];
+    let mut seg_count = [0usize; 2];
+    for (i, (c, g)) in rgb.iter().zip(guides).enumerate() {
+        let roi = dilate(&g.mask, HALF);
+        for py in 0..h + 2 * PAD {
+            for px in 0..stride {
+                let x = (px as isize - PAD as isize).clamp(0, w as isize - 1) as usize;
+                let y = (py as isize - PAD as isize).clamp(0, h as isize - 1) as usize;
+                let col = c.get(x, y);
+                let dist = g.dist.get(x, y);
+                let df = (dist / b).min(1.0);
+                let ep = g.ext_pos.get(x, y);
+                let en = g.ext_neg.get(x, y);
+                let idx = i * frame_len + py * stride + px;
+                feat[idx] = [col[0], col[1], col[2], sq_df * df, sq_ext * ep, sq_ext * en, 0.0, 0.0];
+                let inside = px >= PAD && py >= PAD && px < PAD + w && py < PAD + h;
+                if !inside {
+                    continue;
+                }
+                let interior = dist >= b;
+                let in_mask = g.mask.get(x, y);
+                let away = x >= MARGIN && y >= MARGIN && x + MARGIN < w && y + MARGIN < h;
+                let mut flags = 0;
+                if interior {
+                    flags |= INTERIOR;
+                }
+                if in_mask {
+                    flags |= IN_MASK;
+                    seg_count[interior as usize] += 1;
+                }
+                if roi.get(x, y) && away {
+                    flags |= VALID;
+                    valid[interior as usize].push(idx as u32);
+                }
+                info[idx] = PixInfo { dir: flow_dir(g.flow.get(x, y)), dist, ext_pos: ep, ext_neg: en, flags };
+            }
+        }
+    }
+    SourceLevel { w, h, frames, stride, frame_len, feat, info, valid, seg_count }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dilate_square() {
+        let mut m = Plane::new(9, 9);
+        m.set(4, 4, true);
+        let d = dilate(&m, 2);
+        assert_eq!(d.count(), 25);
+        assert!(d.get(2, 2) && d.get(6, 6) && !d.get(1, 4) && !d.get(7, 4));
+    }
+
+    #[test]
+    fn flow_dir_fallback() {
+        assert_eq!(flow_dir(Vec2::new(0.001, 0.0)), Vec2::X);
+        assert!((flow_dir(Vec2::new(0.0, -3.0)) - Vec2::new(0.0, -1.0)).length() < 1e-6);
+    }
+}

@@ -1,0 +1,97 @@
+//! The target frame T_j at one pyramid level, laid out like the exemplar (8-lane padded
+//! pixels) for the patch error: the current estimate `T^rgb`, the temporal guide `T^prev`,
+//! the guide channels, and per-pixel info.
+
+use super::params::{HALF, Params};
+use super::source::{Feat, IN_MASK, INTERIOR, LANES, PixInfo, VALID, dilate, flow_dir};
+use crate::guide::FrameGuides;
+use crate::img::Rgb;
+
+/// Padding of the target arrays: ⌊n/2⌋, so every window of a pixel in the frame is inside.
+pub(crate) const TPAD: usize = HALF;
+
+/// One level of one target frame.
+pub(crate) struct TargetLevel {
+    pub w: usize,
+    /// Row stride of the padded arrays.
+    pub stride: usize,
+    /// `[T^rgb, √w_df·T^df, √w_ext·T^ext+, √w_ext·T^ext−, 0, 0]`, padded.
+    pub cur: Vec<Feat>,
+    /// `[T^prev, 0…]`, padded.
+    pub prev: Vec<Feat>,
+    /// Per-pixel info, unpadded (`VALID` = active: inside the mask dilated by ⌊n/2⌋).
+    pub info: Vec<PixInfo>,
+    /// `m(q) · w_prev` per pixel, unpadded.
+    pub mw: Vec<f32>,
+    /// Active pixels (unpadded indices), row-major.
+    pub active: Vec<u32>,
+    /// |T_seg|: mask pixels per segment (0 = border, 1 = interior).
+    pub seg_count: [usize; 2],
+}
+
+impl TargetLevel {
+    /// Builds the level from its guides. `ext_cap` clamps the extents (None = no clamp).
+    pub fn new(g: &FrameGuides, params: &Params, border_width: f32, ext_cap: Option<f32>, fill: Rgb) -> TargetLevel {
+        let (w, h) = g.mask.size();
+        let stride = w + 2 * TPAD;
+        let sq_df = params.w_df.sqrt();
+        let sq_ext = params.w_ext.sqrt();
+        let cap = ext_cap.unwrap_or(f32::INFINITY);
+        let roi = dilate(&g.mask, HALF);
+        let mut cur = vec![[0.0f32; LANES]; stride * (h + 2 * TPAD)];
+        let mut info = vec![PixInfo::default(); w * h];
+        let mut active = Vec::new();
+        let mut seg_count = [0usize; 2];
+        for py in 0..h + 2 * TPAD {
+            for px in 0..stride {
+                let x = (px as isize - TPAD as isize).clamp(0, w as isize - 1) as usize;
+                let y = (py as isize - TPAD as isize).clamp(0, h as isize - 1) as usize;
+                let dist = g.dist.get(x, y);
+                let df = (dist / border_width).min(1.0);
+                let ep = g.ext_pos.get(x, y).min(cap);
+                let en = g.ext_neg.get(x, y).min(cap);
+                cur[py * stride + px] = [fill[0], fill[1], fill[2], sq_df * df, sq_ext * ep, sq_ext * en, 0.0, 0.0];
+            }
+        }
+        for y in 0..h {
+            for x in 0..w {
+                let dist = g.dist.get(x, y);
+                let interior = dist >= border_width;
+                let in_mask = g.mask.get(x, y);
+                let mut flags = 0;
+                if interior {
+                    flags |= INTERIOR;
+                }
+                if in_mask {
+                    flags |= IN_MASK;
+                    seg_count[interior as usize] += 1;
+                }
+                if roi.get(x, y) {
+                    flags |= VALID;
+                    active.push((y * w + x) as u32);
+                }
+                info[y * w + x] = PixInfo {
+                    dir: flow_dir(g.flow.get(x, y)),
+                    dist,
+                    ext_pos: g.ext_pos.get(x, y),
+                    ext_neg: g.ext_neg.get(x, y),
+                    flags,
+                };
+            }
+        }
+        let prev = vec![[0.0f32; LANES]; cur.len()];
+        TargetLevel { w, stride, cur, prev, info, mw: vec![0.0; w * h], active, seg_count }
+    }
+
+    /// Padded index of pixel (x, y).
+    #[inline]
+    pub fn pindex(&self, x: usize, y: usize) -> usize {
+        (y + TPAD) * self.stride + x + TPAD
+    }
+
+    /// Segment of pixel `idx` (unpadded): 0 = border, 1 = interior.
+    #[inline]
+    pub fn segment(&self, idx: usize) -> usize {
+        (self.info[idx].flags & INTERIOR != 0) as usize
+    }
+}

@@ -1,0 +1,44 @@
+//! VOTE: every target pixel becomes the average of the colors that the overlapping rotated
+//! source patches of its n × n neighbours put on it (Kwatra et al. 2005; thesis §2.1.2).
+//! Gathered per pixel, so it runs in parallel without write conflicts.
+
+use super::nnf::{Nnf, offsets};
+use super::source::SourceLevel;
+use crate::img::Rgb;
+use rayon::prelude::*;
+
+/// Votes the colors of the `w × h` field; pixels without any voter get `fill`.
+pub(crate) fn vote(src: &SourceLevel, nnf: &Nnf, fill: Rgb) -> Vec<Rgb> {
+    let (w, h) = (nnf.w, nnf.h);
+    let mut out = vec![fill; w * h];
+    out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        for (x, o) in row.iter_mut().enumerate() {
+            if !nnf.data[y * w + x].ok {
+                continue;
+            }
+            let mut acc = [0.0f32; 3];
+            let mut n = 0.0f32;
+            for (a, b) in offsets() {
+                // The neighbour centered at (x − a, y − b) covers this pixel at its offset (a, b).
+                let (nx, ny) = (x as isize - a, y as isize - b);
+                if nx < 0 || ny < 0 || nx >= w as isize || ny >= h as isize {
+                    continue;
+                }
+                let m = &nnf.data[ny as usize * w + nx as usize];
+                if !m.ok {
+                    continue;
+                }
+                let (dx, dy) = m.rotate(a as f32, b as f32);
+                let c = src.sample_rgb(m.i as usize, m.x + dx, m.y + dy);
+                acc[0] += c[0];
+                acc[1] += c[1];
+                acc[2] += c[2];
+                n += 1.0;
+            }
+            if n > 0.0 {
+                *o = [acc[0] / n, acc[1] / n, acc[2] / n];
+            }
+        }
+    });
+    out
+}
