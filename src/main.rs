@@ -23,6 +23,9 @@ struct Cli {
 enum Command {
     /// Print an animation's size, frames and layers; optionally write mask and guide previews.
     Inspect(cli::inspect::Args),
+    /// Measure a stylized sequence against its exemplar and target masks (coverage, texture,
+    /// palette, temporal change, motion); print a table or JSON, optionally draw a chart.
+    Eval(cli::eval::Args),
 }
 
 fn main() -> ExitCode {
@@ -31,6 +34,7 @@ fn main() -> ExitCode {
     let ctx = cli::Ctx { quiet: cli.quiet, verbose: cli.verbose };
     let result = match cli.command {
         Command::Inspect(args) => cli::inspect::run(args, &ctx),
+        Command::Eval(args) => cli::eval::run(args, &ctx),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
