@@ -325,6 +325,10 @@ fn invalid_inputs_are_errors_not_panics() {
     assert!(e.contains("target mask 2") && e.contains("40x48"), "{e}");
     let bad = EvalOptions { interior_margin: f32::NAN, ..Default::default() };
     assert!(eval::evaluate(&out, &ex, &masks, &bad).unwrap_err().to_string().contains("--interior-margin"));
+    // The exemplar as the synthesis would see it with --src-scale 0.5 --src-speed 2.
+    let half = EvalOptions { exemplar_scale: Some(0.5), exemplar_step: Some(2), ..Default::default() };
+    let r = eval::evaluate(&out, &ex, &masks, &half).unwrap();
+    assert_eq!((r.exemplar.width, r.exemplar.frames, r.exemplar.step, r.exemplar.scale), (24, 2, 2, 0.5));
     // Empty target masks: nothing to measure, but no failure.
     let empty = vec![Plane::filled(48, 48, 0.0f32); 3];
     let r = eval::evaluate(&out, &ex, &empty, &o).unwrap();

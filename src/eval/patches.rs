@@ -136,7 +136,7 @@ impl Projection {
         }
         let mut axes = [[0f32; DIM]; PCA_DIMS];
         let mut found: Vec<[f64; DIM]> = Vec::with_capacity(PCA_DIMS);
-        for k in 0..PCA_DIMS {
+        for (k, axis) in axes.iter_mut().enumerate() {
             let mut v = [0f64; DIM];
             for (i, x) in v.iter_mut().enumerate() {
                 // A deterministic start that is not orthogonal to much.
@@ -152,7 +152,7 @@ impl Projection {
             }
             orthonormalize(&mut v, &found);
             found.push(v);
-            axes[k] = v.map(|x| x as f32);
+            *axis = v.map(|x| x as f32);
         }
         Projection { mean: mean.map(|m| m as f32), axes }
     }

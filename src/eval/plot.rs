@@ -40,6 +40,7 @@ const TOP: f64 = 36.0;
 const TITLE: f64 = 22.0;
 const GAP: f64 = 10.0;
 const BOTTOM: f64 = 40.0;
+const PAD: f64 = 4.0;
 const FONT: &str = "font-family=\"DejaVu Sans, sans-serif\"";
 
 struct Panel {
@@ -157,7 +158,8 @@ pub fn plot_svg(report: &Report, options: &PlotOptions) -> String {
             (0.0, (max * 1.1).max(p.min_top))
         });
         let (lo, hi) = (lo as f64, hi as f64);
-        let y_of = |v: f64| top + ph * (1.0 - (v.clamp(lo, hi) - lo) / (hi - lo));
+        // Values map into the panel less a small padding, so lines at the limits stay visible.
+        let y_of = |v: f64| top + PAD + (ph - 2.0 * PAD) * (1.0 - (v.clamp(lo, hi) - lo) / (hi - lo));
         let _ = writeln!(
             s,
             r#"<text x="{LEFT}" y="{:.1}" font-size="12" {FONT} fill="black">{}</text>"#,
@@ -272,8 +274,15 @@ pub fn fonts_available() -> bool {
 }
 
 fn rasterize(report: &Report, options: &PlotOptions) -> std::result::Result<tiny_skia::Pixmap, String> {
+    rasterize_with(report, options, font_db())
+}
+
+fn rasterize_with(
+    report: &Report,
+    options: &PlotOptions,
+    db: Arc<usvg::fontdb::Database>,
+) -> std::result::Result<tiny_skia::Pixmap, String> {
     let svg = plot_svg(report, options);
-    let db = font_db();
     if db.is_empty() {
         log::warn!("no fonts found on this system; the chart is drawn without labels");
     }
@@ -313,6 +322,76 @@ pub fn save_plot(report: &Report, path: &Path, options: &PlotOptions) -> Result<
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::eval::{FrameStats, Painted, Summary};
+
+    fn report(frames: usize) -> Report {
+        let series = |i: usize| (i > 0).then_some(0.5 + 0.1 * i as f32);
+        Report {
+            frames,
+            width: 10,
+            height: 10,
+            exemplar: crate::eval::ExemplarSummary {
+                name: "a<b>".into(),
+                frames: 2,
+                width: 10,
+                height: 10,
+                step: 1,
+                scale: 1.0,
+                local_contrast: Some(0.1),
+                temporal_change: Some(0.1),
+                motion_agreement: None,
+                interior_pixels: 1,
+                patch_pool: 1,
+                temporal_pixels: 1,
+                motion_points: 0,
+            },
+            painted: Painted::Alpha,
+            summary: Summary {
+                coverage_iou: Some(1.0),
+                local_contrast: None,
+                contrast_ratio: None,
+                palette_distance: None,
+                palette_distance_mean: None,
+                patch_nn_distance: None,
+                temporal_change: None,
+                temporal_change_ratio: None,
+                motion_agreement: None,
+                interior_pixels: 0,
+                patch_samples: 0,
+                temporal_pixels: 0,
+                motion_points: 0,
+            },
+            per_frame: (0..frames)
+                .map(|i| FrameStats {
+                    frame: i + 1,
+                    coverage_iou: Some(1.0),
+                    local_contrast: series(i),
+                    contrast_ratio: series(i),
+                    palette_distance: series(i).map(|v| [v, v / 2.0, v / 3.0]),
+                    patch_nn_distance: series(i),
+                    temporal_change: series(i),
+                    temporal_change_ratio: series(i),
+                    motion_agreement: series(i),
+                })
+                .collect(),
+            options: Default::default(),
+        }
+    }
+
+    #[test]
+    fn draws_without_any_font() {
+        let empty = Arc::new(usvg::fontdb::Database::new());
+        let r = report(4);
+        let pixmap = rasterize_with(&r, &PlotOptions::default(), empty).unwrap();
+        assert_eq!(pixmap.width(), 960);
+        // The lines are there (the orange of the contrast panel), the escaped name parses.
+        let orange =
+            pixmap.pixels().iter().filter(|p| p.red() == 0xff && p.green() == 0x7f && p.blue() == 0x0e).count();
+        assert!(orange > 50, "{orange}");
+        // A single frame (a dot per series) and an empty report draw too.
+        assert!(rasterize_with(&report(1), &PlotOptions::default(), Arc::new(Default::default())).is_ok());
+        assert!(rasterize_with(&report(0), &PlotOptions::default(), Arc::new(Default::default())).is_ok());
+    }
 
     #[test]
     fn nice_steps_and_labels() {
