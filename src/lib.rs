@@ -18,6 +18,7 @@
 
 pub mod anim;
 pub mod error;
+pub mod eval;
 pub mod exemplar;
 pub mod guide;
 pub mod img;

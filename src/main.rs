@@ -25,6 +25,9 @@ enum Command {
     Inspect(cli::inspect::Args),
     /// Run the synthesis engine on a plain mask sequence (output in the exemplar's colors).
     Synth(cli::synth::Args),
+    /// Measure a stylized sequence against its exemplar and target masks (coverage, texture,
+    /// palette, temporal change, motion); print a table or JSON, optionally draw a chart.
+    Eval(cli::eval::Args),
 }
 
 fn main() -> ExitCode {
@@ -34,6 +37,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Inspect(args) => cli::inspect::run(args, &ctx),
         Command::Synth(args) => cli::synth::run(args, &ctx),
+        Command::Eval(args) => cli::eval::run(args, &ctx),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

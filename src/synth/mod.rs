@@ -284,7 +284,7 @@ impl Synthesizer {
             let sl = &src.levels[l];
             let gl = &pyr[l];
             let (lw, lh) = gl.mask.size();
-            let mut tgt = TargetLevel::new(gl, p, b, ext_cap, paper);
+            let mut tgt = TargetLevel::new(gl, &src.quant, b, ext_cap, paper);
             masks[l] = shift::mask_flags(&tgt);
             let keys = |it: u64| [p.seed, self.frame as u64, l as u64, it];
             // Temporal guide T^prev and m(q) from the down-scaled shifted field.
@@ -438,9 +438,10 @@ fn write_lanes(tgt: &mut TargetLevel, rgb: &[Rgb], cur: bool) {
         for x in 0..w {
             let c = rgb[y * w + x];
             let px = &mut row[x + pad];
-            px[0] = c[0];
-            px[1] = c[1];
-            px[2] = c[2];
+            // Quantization units of the color lanes: 0..=255.
+            px[0] = c[0] * 255.0;
+            px[1] = c[1] * 255.0;
+            px[2] = c[2] * 255.0;
         }
     });
 }

@@ -137,8 +137,9 @@ fn kernel(
     let feat = &src.feat[..];
     let stride = src.stride;
     let fbase = i * src.frame_len;
-    let wc = [q.w_col, q.w_col, q.w_col, 1.0, 1.0, 1.0, 0.0, 0.0];
-    let wp = [q.mw, q.mw, q.mw, 0.0, 0.0, 0.0, 0.0, 0.0];
+    let lw = &src.lane_w;
+    let wc = [q.w_col * lw[0], q.w_col * lw[1], q.w_col * lw[2], lw[3], lw[4], lw[5], 0.0, 0.0];
+    let wp = [q.mw * lw[0], q.mw * lw[1], q.mw * lw[2], 0.0, 0.0, 0.0, 0.0, 0.0];
     let use_prev = q.mw > 0.0;
     let r = HALF as f32;
     let pad = PAD as f32;
@@ -161,7 +162,7 @@ fn kernel(
             debug_assert!(idx < feat.len() && sx >= 0.0 && sy >= 0.0);
             // SAFETY: idx lies in frame i's padded block (validity rule above).
             let p00 = unsafe { feat.get_unchecked(idx) };
-            let mut v = *p00;
+            let mut v: [f32; LANES] = p00.map(|b| b as f32);
             if flip {
                 v.swap(4, 5);
             }
@@ -208,10 +209,10 @@ pub(crate) fn patch_error_reference(
     flip: bool,
 ) -> f64 {
     let mut total = 0.0f64;
-    let sample = |x: f32, y: f32| -> super::source::Feat {
+    let sample = |x: f32, y: f32| -> [f32; LANES] {
         let px = (x + 0.5).floor() as usize;
         let py = (y + 0.5).floor() as usize;
-        src.feat[i * src.frame_len + py * src.stride + px]
+        src.feat[i * src.frame_len + py * src.stride + px].map(|b| b as f32)
     };
     for b in -(HALF as isize)..=HALF as isize {
         for a in -(HALF as isize)..=HALF as isize {
@@ -225,12 +226,13 @@ pub(crate) fn patch_error_reference(
             let ti = (q.tq as isize + b as isize * tgt.stride as isize + a as isize) as usize;
             let t = tgt.cur[ti];
             let p = tgt.prev[ti];
+            let lw = &src.lane_w;
             for k in 0..3 {
-                total += (q.w_col * (v[k] - t[k]).powi(2)) as f64;
-                total += (q.mw * (v[k] - p[k]).powi(2)) as f64;
+                total += (q.w_col * lw[k] * (v[k] - t[k]).powi(2)) as f64;
+                total += (q.mw * lw[k] * (v[k] - p[k]).powi(2)) as f64;
             }
             for k in 3..6 {
-                total += ((v[k] - t[k]).powi(2)) as f64;
+                total += (lw[k] * (v[k] - t[k]).powi(2)) as f64;
             }
             let ox = (x + 0.5).floor() as usize;
             let oy = (y + 0.5).floor() as usize;
@@ -272,14 +274,14 @@ mod tests {
         let pyr = SourcePyramid::build(&rgb, &g, &params, 6.0, 1);
         let src = &pyr.levels[0];
         let (trgb, tg) = synthetic(30, 30, 12.0, 99);
-        let mut tgt = TargetLevel::new(&tg, &params, 6.0, None, [1.0, 1.0, 1.0]);
+        let mut tgt = TargetLevel::new(&tg, &pyr.quant, 6.0, None, [1.0, 1.0, 1.0]);
         let mut rng = Rng::keyed(&[5]);
         for (k, px) in tgt.cur.iter_mut().enumerate() {
             let c = trgb.data()[k % trgb.len()];
-            px[..3].copy_from_slice(&c);
+            px[..3].copy_from_slice(&c.map(|v| v * 255.0));
         }
         for px in tgt.prev.iter_mut() {
-            px[..3].copy_from_slice(&[rng.f32(), rng.f32(), rng.f32()]);
+            px[..3].copy_from_slice(&[rng.f32() * 255.0, rng.f32() * 255.0, rng.f32() * 255.0]);
         }
         let omega: Vec<f32> = (0..src.feat.len()).map(|_| rng.f32() * 0.01).collect();
         let mut checked = 0;
@@ -317,11 +319,11 @@ mod tests {
         let (rgb, g) = synthetic(32, 32, 12.0, 3);
         let pyr = SourcePyramid::build(&[rgb.clone(), rgb.clone()], &[g.clone(), g.clone()], &params, 5.0, 1);
         let src = &pyr.levels[0];
-        let mut tgt = TargetLevel::new(&g, &params, 5.0, None, [1.0; 3]);
+        let mut tgt = TargetLevel::new(&g, &pyr.quant, 5.0, None, [1.0; 3]);
         for y in 0..32 {
             for x in 0..32 {
                 let k = tgt.pindex(x, y);
-                tgt.cur[k][..3].copy_from_slice(&rgb.get(x, y));
+                tgt.cur[k][..3].copy_from_slice(&rgb.get(x, y).map(|v| (v * 255.0).round()));
             }
         }
         let omega = vec![0.0; src.feat.len()];
@@ -352,7 +354,7 @@ mod speed {
         let pyr = SourcePyramid::build(&rgb, &g, &params, 10.0, 1);
         let src = &pyr.levels[0];
         let (_, tg) = synthetic(500, 400, 150.0, 99);
-        let tgt = TargetLevel::new(&tg, &params, 10.0, None, [1.0, 1.0, 1.0]);
+        let tgt = TargetLevel::new(&tg, &pyr.quant, 10.0, None, [1.0, 1.0, 1.0]);
         let omega = vec![0.0f32; src.feat.len()];
         let mut rng = Rng::keyed(&[5]);
         let n = 2_000_000;

@@ -1,9 +1,11 @@
 //! The exemplar S laid out for the hot loop: per pyramid level, all frames' features in one
-//! padded array of 8-lane pixels, so that a bilinear tap is four 32-byte loads.
+//! padded array of 8-byte pixels, so that a tap is one 8-byte load and the exemplar stays small
+//! enough for the caches (random access dominates PatchMatch).
 //!
-//! Lanes: `[r, g, b, √w_df·S^df, √w_ext·S^ext+, √w_ext·S^ext−, 0, 0]` — the guide channels
-//! are pre-multiplied by the square roots of their weights, so the patch error is a plain sum
-//! of squared differences over lanes (see [`super::patch`]).
+//! Lanes: `[r, g, b, S^df, S^ext+, S^ext−, 0, 0]`, each quantized to 8 bits by [`Quant`]
+//! (rgb exactly as in the 8-bit exemplar; `S^df` over [−1, 1]; extents over [0, max ext]).
+//! Target values are kept in the same units but unrounded, and the per-lane weights absorb
+//! the quantization steps (see [`super::patch`]).
 
 use super::params::{HALF, Params};
 use crate::guide::FrameGuides;
@@ -12,8 +14,43 @@ use glam::Vec2;
 
 /// Lanes per pixel.
 pub(crate) const LANES: usize = 8;
-/// One pixel's features.
-pub(crate) type Feat = [f32; LANES];
+/// One pixel's quantized features.
+pub(crate) type Feat = [u8; LANES];
+
+/// The 8-bit quantization of each lane: value = q · scale + offset.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Quant {
+    pub scale: [f32; LANES],
+    pub offset: [f32; LANES],
+}
+
+impl Quant {
+    /// rgb in 0..=1, df in −1..=1, extents in 0..=`ext_max`.
+    pub fn new(ext_max: f32) -> Quant {
+        let e = ext_max.max(1e-3) / 255.0;
+        let c = 1.0 / 255.0;
+        Quant { scale: [c, c, c, 2.0 / 255.0, e, e, 1.0, 1.0], offset: [0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0] }
+    }
+
+    /// `v` of lane `k` in quantization units (not rounded).
+    #[inline]
+    pub fn units(&self, k: usize, v: f32) -> f32 {
+        (v - self.offset[k]) / self.scale[k]
+    }
+
+    /// `v` of lane `k` quantized.
+    #[inline]
+    pub fn quantize(&self, k: usize, v: f32) -> u8 {
+        self.units(k, v).round().clamp(0.0, 255.0) as u8
+    }
+
+    /// Per-lane weights of squared differences in quantization units:
+    /// `[1, 1, 1, w_df, w_ext, w_ext, 0, 0] · scale²` (the color lanes get w_col per query).
+    pub fn weights(&self, w_df: f32, w_ext: f32) -> [f32; LANES] {
+        let w = [1.0, 1.0, 1.0, w_df, w_ext, w_ext, 0.0, 0.0];
+        std::array::from_fn(|k| w[k] * self.scale[k] * self.scale[k])
+    }
+}
 /// Padding around every source frame: rotated windows around a valid center (≥ `MARGIN` px
 /// from the border) plus the bilinear neighbour never leave the padded frame.
 pub(crate) const PAD: usize = 4;
@@ -121,6 +158,8 @@ pub(crate) struct SourceLevel {
     pub valid: [Vec<u32>; 2],
     /// |S_seg|: mask pixels per segment over all frames (for ω*).
     pub seg_count: [usize; 2],
+    /// Lane weights in quantization units ([`Quant::weights`]).
+    pub lane_w: [f32; LANES],
 }
 
 impl SourceLevel {
@@ -160,12 +199,12 @@ impl SourceLevel {
         let fx = px - x0 as f32;
         let fy = py - y0 as f32;
         let base = i * self.frame_len + y0 * self.stride + x0;
-        let p = |k: usize| &self.feat[k];
+        let p = |k: usize, c: usize| self.feat[k][c] as f32;
         let mut out = [0.0; 3];
         for (c, o) in out.iter_mut().enumerate() {
-            let top = p(base)[c] + (p(base + 1)[c] - p(base)[c]) * fx;
-            let bot = p(base + self.stride)[c] + (p(base + self.stride + 1)[c] - p(base + self.stride)[c]) * fx;
-            *o = top + (bot - top) * fy;
+            let top = p(base, c) + (p(base + 1, c) - p(base, c)) * fx;
+            let bot = p(base + self.stride, c) + (p(base + self.stride + 1, c) - p(base + self.stride, c)) * fx;
+            *o = (top + (bot - top) * fy) * (1.0 / 255.0);
         }
         out
     }
@@ -177,6 +216,8 @@ pub struct SourcePyramid {
     pub(crate) levels: Vec<SourceLevel>,
     /// Largest |ext| over the exemplar (full-resolution pixels), for clamping target extents.
     pub(crate) ext_max: f32,
+    /// The lanes' quantization.
+    pub(crate) quant: Quant,
     /// Border width b actually used (pixels).
     pub(crate) border_width: f32,
     /// Mean color of the exemplar outside its masks (≈ the paper).
@@ -194,8 +235,6 @@ impl SourcePyramid {
         border_width: f32,
         levels: usize,
     ) -> SourcePyramid {
-        let sq_df = params.w_df.sqrt();
-        let sq_ext = params.w_ext.sqrt();
         let mut ext_max: f32 = 0.0;
         let mut paper = [0.0f64; 3];
         let mut paper_n = 0usize;
@@ -217,6 +256,7 @@ impl SourcePyramid {
         } else {
             [1.0, 1.0, 1.0]
         };
+        let quant = Quant::new(ext_max);
         let mut cur_rgb: Vec<Plane<Rgb>> = frames.to_vec();
         let mut cur_g: Vec<FrameGuides> = guides.to_vec();
         let mut out = Vec::with_capacity(levels);
@@ -225,9 +265,16 @@ impl SourcePyramid {
                 cur_rgb = cur_rgb.iter().map(img::downsample2).collect();
                 cur_g = cur_g.iter().map(|g| g.downsample2()).collect();
             }
-            out.push(build_level(&cur_rgb, &cur_g, sq_df, sq_ext, border_width));
+            out.push(build_level(&cur_rgb, &cur_g, &quant, quant.weights(params.w_df, params.w_ext), border_width));
         }
-        SourcePyramid { levels: out, ext_max, border_width, paper, size: frames[0].size() }
+        SourcePyramid {
+            levels: out,
+            ext_max,
+            quant,
+            border_width,
+            paper,
+            size: frames[0].size(),
+        }
     }
 
     /// Number of levels.
@@ -236,12 +283,12 @@ impl SourcePyramid {
     }
 }
 
-fn build_level(rgb: &[Plane<Rgb>], guides: &[FrameGuides], sq_df: f32, sq_ext: f32, b: f32) -> SourceLevel {
+fn build_level(rgb: &[Plane<Rgb>], guides: &[FrameGuides], qn: &Quant, lane_w: [f32; LANES], b: f32) -> SourceLevel {
     let (w, h) = rgb[0].size();
     let stride = w + 2 * PAD;
     let frame_len = stride * (h + 2 * PAD);
     let frames = rgb.len();
-    let mut feat = vec![[0.0f32; LANES]; frame_len * frames];
+    let mut feat = vec![[0u8; LANES]; frame_len * frames];
     let mut info = vec![PixInfo::default(); frame_len * frames];
     let mut valid: [Vec<u32>; 2] = [Vec::new(), Vec::new()];
     let mut seg_count = [0usize; 2];
@@ -257,7 +304,8 @@ fn build_level(rgb: &[Plane<Rgb>], guides: &[FrameGuides], sq_df: f32, sq_ext: f
                 let ep = g.ext_pos.get(x, y);
                 let en = g.ext_neg.get(x, y);
                 let idx = i * frame_len + py * stride + px;
-                feat[idx] = [col[0], col[1], col[2], sq_df * df, sq_ext * ep, sq_ext * en, 0.0, 0.0];
+                let v = [col[0], col[1], col[2], df, ep, en, 0.0, 0.0];
+                feat[idx] = std::array::from_fn(|k| if k < 6 { qn.quantize(k, v[k]) } else { 0 });
                 let inside = px >= PAD && py >= PAD && px < PAD + w && py < PAD + h;
                 if !inside {
                     continue;
@@ -281,7 +329,7 @@ fn build_level(rgb: &[Plane<Rgb>], guides: &[FrameGuides], sq_df: f32, sq_ext: f
             }
         }
     }
-    SourceLevel { w, h, frames, stride, frame_len, feat, info, valid, seg_count }
+    SourceLevel { w, h, frames, stride, frame_len, feat, info, valid, seg_count, lane_w }
 }
 
 #[cfg(test)]

@@ -2,8 +2,8 @@
 //! pixels) for the patch error: the current estimate `T^rgb`, the temporal guide `T^prev`,
 //! the guide channels, and per-pixel info.
 
-use super::params::{HALF, Params};
-use super::source::{Feat, IN_MASK, INTERIOR, LANES, PixInfo, VALID, dilate, flow_dir};
+use super::params::HALF;
+use super::source::{IN_MASK, INTERIOR, LANES, PixInfo, Quant, VALID, dilate, flow_dir};
 use crate::guide::FrameGuides;
 use crate::img::Rgb;
 
@@ -15,10 +15,10 @@ pub(crate) struct TargetLevel {
     pub w: usize,
     /// Row stride of the padded arrays.
     pub stride: usize,
-    /// `[T^rgb, √w_df·T^df, √w_ext·T^ext+, √w_ext·T^ext−, 0, 0]`, padded.
-    pub cur: Vec<Feat>,
-    /// `[T^prev, 0…]`, padded.
-    pub prev: Vec<Feat>,
+    /// `[T^rgb, T^df, T^ext+, T^ext−, 0, 0]` in the source's quantization units, padded.
+    pub cur: Vec<[f32; LANES]>,
+    /// `[T^prev, 0…]` in quantization units, padded.
+    pub prev: Vec<[f32; LANES]>,
     /// Per-pixel info, unpadded (`VALID` = active: inside the mask dilated by ⌊n/2⌋).
     pub info: Vec<PixInfo>,
     /// `m(q) · w_prev` per pixel, unpadded.
@@ -31,11 +31,9 @@ pub(crate) struct TargetLevel {
 
 impl TargetLevel {
     /// Builds the level from its guides. `ext_cap` clamps the extents (None = no clamp).
-    pub fn new(g: &FrameGuides, params: &Params, border_width: f32, ext_cap: Option<f32>, fill: Rgb) -> TargetLevel {
+    pub fn new(g: &FrameGuides, quant: &Quant, border_width: f32, ext_cap: Option<f32>, fill: Rgb) -> TargetLevel {
         let (w, h) = g.mask.size();
         let stride = w + 2 * TPAD;
-        let sq_df = params.w_df.sqrt();
-        let sq_ext = params.w_ext.sqrt();
         let cap = ext_cap.unwrap_or(f32::INFINITY);
         let roi = dilate(&g.mask, HALF);
         let mut cur = vec![[0.0f32; LANES]; stride * (h + 2 * TPAD)];
@@ -50,7 +48,10 @@ impl TargetLevel {
                 let df = (dist / border_width).min(1.0);
                 let ep = g.ext_pos.get(x, y).min(cap);
                 let en = g.ext_neg.get(x, y).min(cap);
-                cur[py * stride + px] = [fill[0], fill[1], fill[2], sq_df * df, sq_ext * ep, sq_ext * en, 0.0, 0.0];
+                let v = [fill[0], fill[1], fill[2], df, ep, en, 0.0, 0.0];
+                // Guide lanes on the source's 8-bit grid (identical guides compare exactly equal).
+                cur[py * stride + px] =
+                    std::array::from_fn(|k| if k < 3 { quant.units(k, v[k]) } else if k < 6 { quant.quantize(k, v[k]) as f32 } else { 0.0 });
             }
         }
         for y in 0..h {

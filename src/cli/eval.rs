@@ -1,0 +1,184 @@
+//! `fluidymation eval`: measure a stylized sequence against its exemplar and target masks.
+
+use super::Ctx;
+use anyhow::{Context, bail};
+use fluidymation::eval::{self, EvalOptions, plot};
+use fluidymation::exemplar::{Exemplar, parse_hex_color};
+use fluidymation::img::{self, Plane};
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// Arguments of `eval`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Directory (or glob) of the stylized frames, 0001.png …: RGBA in the exemplar's colors
+    /// with alpha = the mask, or opaque frames composited over a background.
+    pub out_dir: PathBuf,
+    /// The exemplar the frames were stylized with: its folder (holding exemplar.toml, frames/,
+    /// masks/).
+    #[arg(long, short = 'e', value_name = "DIR")]
+    pub exemplar: String,
+    /// Directory (or glob) of the target masks, one PNG per frame (white or alpha = inside).
+    #[arg(long, value_name = "DIR")]
+    pub masks: PathBuf,
+    /// Print the report as JSON (with the per-frame series) instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// Also draw the per-frame series as a PNG chart.
+    #[arg(long, value_name = "FILE.png")]
+    pub plot: Option<PathBuf>,
+    /// Print the per-frame table after the summary.
+    #[arg(long)]
+    pub per_frame: bool,
+    /// Background color of opaque frames, #rrggbb [default: the dominant color of the frame
+    /// borders].
+    #[arg(long, value_name = "#RRGGBB")]
+    pub background: Option<String>,
+    /// Color distance (sRGB, 0..1.73) from the background above which a pixel of an opaque
+    /// frame counts as painted.
+    #[arg(long, default_value_t = 0.1)]
+    pub paint_threshold: f32,
+    /// Pixels at least this far inside a mask form its interior, where texture, colors and
+    /// changes are measured.
+    #[arg(long, default_value_t = 5.0)]
+    pub interior_margin: f32,
+    /// Use every n-th exemplar frame, as `synth --src-speed` [default: the exemplar's speed].
+    #[arg(long, value_name = "N")]
+    pub src_speed: Option<usize>,
+    /// Resize the exemplar first, as `synth --src-scale` [default: the exemplar's scale].
+    #[arg(long, value_name = "FACTOR")]
+    pub src_scale: Option<f32>,
+    /// Output patches sampled for the nearest-neighbour distance.
+    #[arg(long, default_value_t = 2048)]
+    pub patch_samples: usize,
+    /// Search radius of the block-matching flow, pixels per frame.
+    #[arg(long, default_value_t = 6)]
+    pub flow_radius: usize,
+    /// Seed of the random sampling (results are deterministic for a seed).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+/// Finds the exemplar given on the command line.
+///
+/// NAME LOOKUP — the one call site to change: once exemplars can be looked up by name (the
+/// exemplar registry), try the name here before falling back to a folder path. Until then only
+/// a folder is accepted.
+fn load_exemplar(arg: &str) -> anyhow::Result<Exemplar> {
+    let path = Path::new(arg);
+    if path.is_dir() {
+        return Exemplar::load(path).with_context(|| format!("could not load the exemplar '{}'", arg));
+    }
+    bail!(
+        "'{}' is not an exemplar folder; pass the folder holding exemplar.toml, frames/ and masks/ \
+         (looking exemplars up by name is not supported by `eval` yet)",
+        arg
+    )
+}
+
+/// Loads every file with `load`, in parallel, reporting the first failure in sequence order.
+fn load_all<T: Send>(
+    files: &[PathBuf],
+    load: impl Fn(&Path) -> fluidymation::Result<T> + Sync,
+) -> fluidymation::Result<Vec<T>> {
+    let loaded: Vec<fluidymation::Result<T>> = files.par_iter().map(|f| load(f)).collect();
+    loaded.into_iter().collect()
+}
+
+fn name(p: &Path) -> String {
+    p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| p.display().to_string())
+}
+
+/// Runs `eval`.
+pub fn run(args: Args, ctx: &Ctx) -> anyhow::Result<()> {
+    let background = match &args.background {
+        Some(s) => Some(parse_hex_color(s).with_context(|| format!("--background '{}' is not a #rrggbb color", s))?),
+        None => None,
+    };
+    let defaults = EvalOptions::default();
+    let options = EvalOptions {
+        interior_margin: args.interior_margin,
+        background,
+        paint_threshold: args.paint_threshold,
+        exemplar_step: args.src_speed,
+        exemplar_scale: args.src_scale,
+        patches: eval::PatchParams { samples: args.patch_samples, seed: args.seed, ..defaults.patches },
+        motion: eval::MotionParams {
+            block: eval::BlockMatchParams { radius: args.flow_radius, ..defaults.motion.block },
+            ..defaults.motion
+        },
+        ..defaults
+    };
+    options.validate()?;
+
+    let frame_files = fluidymation::seq::list_sequence(&args.out_dir, &["png"])
+        .with_context(|| format!("could not read the stylized frames in '{}'", args.out_dir.display()))?;
+    let mask_files = fluidymation::seq::list_sequence(&args.masks, &["png"])
+        .with_context(|| format!("could not read the target masks in '{}'", args.masks.display()))?;
+    if frame_files.len() != mask_files.len() {
+        let n = frame_files.len().min(mask_files.len());
+        let extra = if frame_files.len() > n {
+            format!("frame '{}' has no mask", frame_files[n].display())
+        } else {
+            format!("mask '{}' has no frame", mask_files[n].display())
+        };
+        bail!(
+            "'{}' holds {} frames but '{}' holds {} masks ({}); give one mask per frame",
+            args.out_dir.display(),
+            frame_files.len(),
+            args.masks.display(),
+            mask_files.len(),
+            extra
+        );
+    }
+    let exemplar = load_exemplar(&args.exemplar)?;
+
+    let frames = load_all(&frame_files, img::load_rgba)?;
+    let masks: Vec<Plane<f32>> = load_all(&mask_files, img::load_gray)?;
+    let size = frames[0].size();
+    for (files, sizes, what) in [
+        (&frame_files, frames.iter().map(Plane::size).collect::<Vec<_>>(), "frame"),
+        (&mask_files, masks.iter().map(Plane::size).collect::<Vec<_>>(), "mask"),
+    ] {
+        if let Some(i) = sizes.iter().position(|&s| s != size) {
+            bail!(
+                "{} '{}' is {}x{} but frame '{}' is {}x{}; frames and masks must all have one size",
+                what,
+                files[i].display(),
+                sizes[i].0,
+                sizes[i].1,
+                frame_files[0].display(),
+                size.0,
+                size.1
+            );
+        }
+    }
+    log::info!(
+        "evaluating {} frames ({} … {}) against '{}'",
+        frames.len(),
+        name(&frame_files[0]),
+        name(&frame_files[frames.len() - 1]),
+        exemplar.meta.name
+    );
+
+    let report = eval::evaluate(&frames, &exemplar, &masks, &options).context("evaluation failed")?;
+
+    if args.json {
+        let text = serde_json::to_string_pretty(&report).context("could not serialize the report")?;
+        println!("{}", text);
+    } else {
+        println!("{}", report);
+        if args.per_frame {
+            println!();
+            print!("{}", report.per_frame_table());
+        }
+    }
+    if let Some(path) = &args.plot {
+        plot::save_plot(&report, path, &plot::PlotOptions::default())
+            .with_context(|| format!("could not write the chart '{}'", path.display()))?;
+        if !ctx.quiet {
+            eprintln!("chart written to '{}'", path.display());
+        }
+    }
+    Ok(())
+}

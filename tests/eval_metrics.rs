@@ -1,0 +1,359 @@
+//! Validation of the `eval` metrics themselves on synthetic sequences with known answers.
+
+mod eval_support;
+
+use eval_support::*;
+use fluidymation::eval::{self, EvalOptions, Painted, Shape};
+use fluidymation::img::{Plane, Rgb, Rgba};
+use glam::Vec2;
+
+const SIZE: usize = 96;
+const FRAMES: usize = 12;
+
+fn bloom() -> Bloom {
+    Bloom { size: SIZE, frames: FRAMES }
+}
+
+/// The exemplar's own frames as a stylized output: its paint as straight RGBA with alpha = its
+/// masks (which composites over the paper into exactly its frames).
+fn exemplar_as_output(b: &Bloom) -> (Vec<Plane<Rgba>>, Vec<Plane<f32>>) {
+    let masks: Vec<_> = (0..b.frames).map(|t| b.mask(t)).collect();
+    let out = (0..b.frames).map(|t| with_alpha(&b.field(t), &masks[t])).collect();
+    (out, masks)
+}
+
+fn close(a: f32, b: f32, tol: f32) -> bool {
+    (a - b).abs() <= tol
+}
+
+#[test]
+fn exemplar_against_itself_scores_identity() {
+    let b = bloom();
+    let ex = b.exemplar();
+    let (out, masks) = exemplar_as_output(&b);
+    let r = eval::evaluate(&out, &ex, &masks, &EvalOptions::default()).unwrap();
+    let s = &r.summary;
+    println!("{r}\n{}", r.per_frame_table());
+    assert_eq!(r.painted, Painted::Alpha);
+    assert_eq!(s.coverage_iou, Some(1.0));
+    assert!(close(s.contrast_ratio.unwrap(), 1.0, 1e-6), "{:?}", s.contrast_ratio);
+    assert!(close(s.temporal_change_ratio.unwrap(), 1.0, 1e-6), "{:?}", s.temporal_change_ratio);
+    assert_eq!(s.palette_distance, Some([0.0; 3]));
+    assert_eq!(s.motion_agreement, r.exemplar.motion_agreement);
+    // The bloom's paint flows outward with its growing mask.
+    assert!(s.motion_agreement.unwrap() > 0.5, "{:?}", s.motion_agreement);
+    // Its patches are found among the exemplar's own.
+    assert_eq!(s.patch_nn_distance, Some(0.0));
+    // The exemplar changes between frames: the reference is a real number, not ~0.
+    assert!(r.exemplar.temporal_change.unwrap() > 0.002, "{:?}", r.exemplar.temporal_change);
+    assert!(s.temporal_pixels > 1000 && s.motion_points > 100 && s.patch_samples >= 2040);
+    // Per-frame series line up with the frames. Frame 1 has no temporal value; nor has
+    // frame 2: the bloom grows 2.5 px/frame, so its stationary interior needs
+    // sdf >= 5 + 4·2.5 = 15 px, more than its radius of 16.5 px allows at 0.5 px inside.
+    assert_eq!(r.per_frame.len(), FRAMES);
+    assert!(r.per_frame[0].temporal_change.is_none() && r.per_frame[1].temporal_change.is_none());
+    assert!(r.per_frame[2..].iter().all(|f| f.temporal_change.is_some() && f.motion_agreement.is_some()));
+    assert!(r.per_frame.iter().all(|f| f.coverage_iou == Some(1.0)));
+}
+
+#[test]
+fn flat_fill_has_no_contrast_no_change_and_the_wrong_palette() {
+    let b = bloom();
+    let ex = b.exemplar();
+    let masks: Vec<_> = (0..FRAMES).map(|t| b.mask(t)).collect();
+    // The exemplar's mean interior color, flat: a washed-out rendition.
+    let flat_color = paint(0.25 + 0.35 * 0.5 + 0.5 * 0.5 + 0.15 * 0.5);
+    let out: Vec<_> = masks.iter().map(|m| with_alpha(&Plane::filled(SIZE, SIZE, flat_color), m)).collect();
+    let r = eval::evaluate(&out, &ex, &masks, &EvalOptions::default()).unwrap();
+    let s = &r.summary;
+    println!("{r}");
+    assert!(s.local_contrast.unwrap() < 1e-6);
+    assert!(s.contrast_ratio.unwrap() < 1e-4, "{:?}", s.contrast_ratio);
+    assert!(s.temporal_change_ratio.unwrap() < 1e-4, "{:?}", s.temporal_change_ratio);
+    assert_eq!(s.coverage_iou, Some(1.0));
+    // One color against a spread of colors: the palette distance is the spread's mean
+    // deviation, clearly above 0 in the channel the pigment absorbs most.
+    assert!(s.palette_distance.unwrap()[0] > 0.02, "{:?}", s.palette_distance);
+    // (The patch distance is no wash-out detector: a flat patch of the mean color is close to
+    // the smoothest patches of a low-contrast exemplar. Contrast is.)
+    // Textureless paint: no flow can be measured, so there is no motion statistic.
+    assert_eq!(s.motion_agreement, None);
+}
+
+#[test]
+fn shuffled_frames_flicker_and_frozen_frames_are_glued() {
+    let b = bloom();
+    let ex = b.exemplar();
+    let masks: Vec<_> = (0..FRAMES).map(|t| b.mask(t)).collect();
+    // A fixed permutation: each frame shows the texture of a far-away exemplar time.
+    let perm = [7, 2, 10, 0, 5, 11, 3, 8, 1, 9, 4, 6];
+    let shuffled: Vec<_> = (0..FRAMES).map(|t| with_alpha(&b.field(perm[t]), &masks[t])).collect();
+    let opts = EvalOptions { patches: eval::PatchParams { samples: 256, ..Default::default() }, ..Default::default() };
+    let r = eval::evaluate(&shuffled, &ex, &masks, &opts).unwrap();
+    let ratio = r.summary.temporal_change_ratio.unwrap();
+    println!("shuffled: temporal change ratio {ratio}");
+    assert!(ratio > 3.0, "{ratio}");
+    // Texture and colors are still the exemplar's: contrast ratio ≈ 1, small palette distance.
+    assert!(close(r.summary.contrast_ratio.unwrap(), 1.0, 0.15), "{:?}", r.summary.contrast_ratio);
+    assert!(r.summary.palette_distance_mean.unwrap() < 0.02);
+
+    // Frozen: the same frame over and over on a still target.
+    let still = b.mask(6);
+    let frozen: Vec<_> = (0..FRAMES).map(|_| with_alpha(&b.field(6), &still)).collect();
+    let still_masks = vec![still; FRAMES];
+    let r = eval::evaluate(&frozen, &ex, &still_masks, &opts).unwrap();
+    assert_eq!(r.summary.temporal_change, Some(0.0));
+    assert_eq!(r.summary.temporal_change_ratio, Some(0.0));
+    // On a still target every interior pixel is stationary.
+    let interior = Shape::from_coverage(&still_masks[0]).interior(5.0).count() as u64;
+    assert_eq!(r.summary.temporal_pixels, interior * (FRAMES as u64 - 1));
+
+    // The exemplar's own evolving texture on a small still disc at its center (where the
+    // exemplar's stationary interior is): exemplar-like dynamics.
+    let small = vec![disc(SIZE, SIZE, b.center(), b.center(), 13.0); FRAMES];
+    let living: Vec<_> = (0..FRAMES).map(|t| with_alpha(&b.field(t), &small[t])).collect();
+    let r = eval::evaluate(&living, &ex, &small, &opts).unwrap();
+    let ratio = r.summary.temporal_change_ratio.unwrap();
+    println!("living texture on a still target: temporal change ratio {ratio}");
+    assert!(ratio > 0.5 && ratio < 2.0, "{ratio}");
+}
+
+/// A shape translating right by 2 px/frame whose texture moves by `tex_speed` px/frame:
+/// a vertical band 30 px wide spanning the frame (edges perpendicular to the motion), or a
+/// disc of radius 22.
+fn translating(tex_speed: f32, band: bool) -> (Vec<Plane<f32>>, Vec<Shape>) {
+    let (w, h) = (128, 80);
+    let frames: Vec<Plane<f32>> = (0..8)
+        .map(|t| {
+            Plane::from_fn(w, h, |x, y| {
+                let d = texture(x as f32 - tex_speed * t as f32, y as f32, 5);
+                eval::luma(paint(0.3 + 0.9 * d))
+            })
+        })
+        .collect();
+    let shapes = (0..8)
+        .map(|t| {
+            let cx = 40.0 + 2.0 * t as f32;
+            let cov = if band {
+                Plane::from_fn(w, h, |x, _| if (x as f32 - cx).abs() < 15.0 { 1.0 } else { 0.0 })
+            } else {
+                disc(w, h, cx, 40.0, 22.0)
+            };
+            Shape::from_coverage(&cov)
+        })
+        .collect();
+    (frames, shapes)
+}
+
+#[test]
+fn motion_agreement_with_and_against_the_target() {
+    let params = eval::MotionParams::default();
+    let agree = |tex_speed: f32, band: bool| {
+        let (frames, shapes) = translating(tex_speed, band);
+        eval::motion_agreement(&frames, &shapes, &params)
+    };
+    // Straight edges perpendicular to the motion: ±1.
+    let (with, against, glued) = (agree(2.0, true), agree(-2.0, true), agree(0.0, true));
+    println!(
+        "band: with {:?} against {:?} glued {:?} ({} points)",
+        with.value, against.value, glued.value, with.samples
+    );
+    assert!(with.value.unwrap() > 0.95, "{:?}", with.value);
+    assert!(against.value.unwrap() < -0.95, "{:?}", against.value);
+    assert!(glued.value.unwrap().abs() < 0.02, "{:?}", glued.value);
+    assert!(with.samples > 300);
+    assert_eq!(with.per_frame[0], None);
+    assert!(with.per_frame[1..].iter().all(|v| v.unwrap() > 0.9));
+    // A disc: only the normal component of its motion is known, so a perfect flow scores the
+    // mean |cos| between translation and normals (≈ 0.7), and its opposite.
+    let (with, against, glued) = (agree(2.0, false), agree(-2.0, false), agree(0.0, false));
+    println!(
+        "disc: with {:?} against {:?} glued {:?} ({} points)",
+        with.value, against.value, glued.value, with.samples
+    );
+    assert!(with.value.unwrap() > 0.6, "{:?}", with.value);
+    assert!(against.value.unwrap() < -0.6, "{:?}", against.value);
+    assert!(glued.value.unwrap().abs() < 0.02, "{:?}", glued.value);
+}
+
+#[test]
+fn target_motion_points_where_the_mask_moves() {
+    let grow =
+        (Shape::from_coverage(&disc(64, 64, 32.0, 32.0, 15.0)), Shape::from_coverage(&disc(64, 64, 32.0, 32.0, 17.0)));
+    let m = eval::target_motion(&grow.0, &grow.1, 32 + 14, 32).unwrap();
+    assert!(m.x > 1.5 && m.y.abs() < 0.3, "{m}"); // outward on the right
+    let m = eval::target_motion(&grow.0, &grow.1, 32, 32 - 14).unwrap();
+    assert!(m.y < -1.5 && m.x.abs() < 0.3, "{m}"); // outward at the top
+    let m = eval::target_motion(&grow.1, &grow.0, 32 + 14, 32).unwrap();
+    assert!(m.x < -1.5, "{m}"); // shrinking: inward
+    let slide =
+        (Shape::from_coverage(&disc(64, 64, 30.0, 32.0, 15.0)), Shape::from_coverage(&disc(64, 64, 33.0, 32.0, 15.0)));
+    for x in [30 + 13, 30 - 13] {
+        let m = eval::target_motion(&slide.0, &slide.1, x, 32).unwrap();
+        assert!(m.normalize().dot(Vec2::X) > 0.95 && m.x > 2.0, "{x}: {m}"); // leading and trailing edge
+    }
+    let field = eval::target_motion_field(&grow.0, &grow.1);
+    assert_eq!(field.get(32, 32), Vec2::ZERO); // center: no gradient
+}
+
+#[test]
+fn block_matching_recovers_known_shifts() {
+    let tex = |dx: f32, dy: f32| Plane::from_fn(64, 64, |x, y| texture(x as f32 - dx, y as f32 - dy, 9));
+    let p = eval::BlockMatchParams::default();
+    let f = eval::match_block(&tex(0.0, 0.0), &tex(3.0, -2.0), None, 32, 32, &p).unwrap();
+    assert!((f - Vec2::new(3.0, -2.0)).length() < 0.05, "{f}");
+    let f = eval::match_block(&tex(0.0, 0.0), &tex(1.5, 0.5), None, 30, 30, &p).unwrap();
+    assert!((f - Vec2::new(1.5, 0.5)).length() < 0.25, "{f}");
+    // Flat: unknown. Dense flow of a pure translation is that translation in the middle.
+    assert!(eval::match_block(&Plane::filled(64, 64, 0.5), &Plane::filled(64, 64, 0.5), None, 32, 32, &p).is_none());
+    let small = eval::BlockMatchParams { radius: 3, ..p };
+    let field = eval::block_matching_flow(&tex(0.0, 0.0), &tex(-1.0, 2.0), &small);
+    let mut good = 0;
+    for y in 10..54 {
+        for x in 10..54 {
+            good += field.get(x, y).is_some_and(|v| (v - Vec2::new(-1.0, 2.0)).length() < 0.1) as usize;
+        }
+    }
+    assert!(good as f32 > 0.98 * 44.0 * 44.0, "{good}");
+}
+
+#[test]
+fn coverage_iou_exact_shifted_and_composited() {
+    let square = |x0: usize| {
+        Plane::from_fn(64, 48, |x, y| if (x0..x0 + 20).contains(&x) && (10..30).contains(&y) { 1.0f32 } else { 0.0 })
+    };
+    let paint_rgb = Plane::filled(64, 48, [0.2f32, 0.3, 0.8]);
+    let bg: Rgb = [1.0, 0.98, 0.95];
+    let targets: Vec<Shape> = [square(10), square(10)].iter().map(Shape::from_coverage).collect();
+    // Exact, in both modes.
+    let exact = [with_alpha(&paint_rgb, &square(10)), with_alpha(&paint_rgb, &square(10))];
+    let m = eval::coverage_iou(&exact, &targets, &eval::detect_painted(&exact, None, 0.1));
+    assert_eq!((m.value, m.per_frame.clone()), (Some(1.0), vec![Some(1.0), Some(1.0)]));
+    // Frame 2 painted 4 px to the right: IoU = 20·16 / (20·24) = 2/3; pooled (400 + 320) / (400 + 480).
+    let shifted = [composited(&paint_rgb, &square(10), bg), composited(&paint_rgb, &square(14), bg)];
+    let painted = eval::detect_painted(&shifted, None, 0.1);
+    match painted {
+        Painted::Color { background, .. } => assert!(close(background[2], 0.95, 1e-6), "{background:?}"),
+        Painted::Alpha => panic!("opaque frames detected as alpha"),
+    }
+    let m = eval::coverage_iou(&shifted, &targets, &painted);
+    assert_eq!(m.per_frame[0], Some(1.0));
+    assert!(close(m.per_frame[1].unwrap(), 2.0 / 3.0, 1e-6), "{:?}", m.per_frame);
+    assert!(close(m.value.unwrap(), 720.0 / 880.0, 1e-6), "{:?}", m.value);
+    // Two empty masks agree perfectly; disjoint ones not at all.
+    let none = Plane::filled(8, 8, false);
+    assert_eq!(eval::iou(&none, &none), 1.0);
+    assert_eq!(eval::iou(&square(0).threshold(0.5), &square(30).threshold(0.5)), 0.0);
+}
+
+#[test]
+fn palette_distance_measures_a_known_color_shift() {
+    let b = bloom();
+    let ex = b.exemplar();
+    let masks: Vec<_> = (0..FRAMES).map(|t| b.mask(t)).collect();
+    let out: Vec<_> =
+        (0..FRAMES).map(|t| with_alpha(&b.frame(t).map(|c| [c[0] + 0.04, c[1], c[2] - 0.03]), &masks[t])).collect();
+    let opts = EvalOptions { patches: eval::PatchParams { samples: 64, ..Default::default() }, ..Default::default() };
+    let r = eval::evaluate(&out, &ex, &masks, &opts).unwrap();
+    let d = r.summary.palette_distance.unwrap();
+    let tol = 0.5 / (eval::HISTOGRAM_BINS - 1) as f32 + 1e-5;
+    assert!(close(d[0], 0.04, tol) && d[1] < tol && close(d[2], 0.03, tol), "{d:?}");
+    // A shift leaves the texture alone.
+    assert!(close(r.summary.contrast_ratio.unwrap(), 1.0, 1e-3));
+}
+
+#[test]
+fn patch_distance_orders_copies_noise_and_flat_fills() {
+    let b = bloom();
+    let frames: Vec<_> = (0..FRAMES).map(|t| b.frame(t)).collect();
+    let regions: Vec<_> = (0..FRAMES).map(|t| Shape::from_coverage(&b.mask(t)).interior(5.0)).collect();
+    let p = eval::PatchParams { samples: 512, ..Default::default() };
+    let own = eval::patch_nn_distance(&frames, &regions, &frames, &regions, &p).value.unwrap();
+    let mut s = 1u64;
+    let noisy: Vec<Plane<Rgb>> = frames
+        .iter()
+        .map(|f| {
+            f.map(|c| {
+                s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                let n = ((s >> 40) as f32 / (1u64 << 24) as f32 - 0.5) * 0.2;
+                c.map(|v| (v + n).clamp(0.0, 1.0))
+            })
+        })
+        .collect();
+    let noise = eval::patch_nn_distance(&noisy, &regions, &frames, &regions, &p).value.unwrap();
+    let red: Vec<_> = frames.iter().map(|_| Plane::filled(SIZE, SIZE, [0.9f32, 0.1, 0.1])).collect();
+    let flat = eval::patch_nn_distance(&red, &regions, &frames, &regions, &p).value.unwrap();
+    println!("patch NN: own {own} noisy {noise} red {flat}");
+    assert_eq!(own, 0.0);
+    assert!(noise > 0.04 && noise > 4.0 * own, "{noise}");
+    assert!(flat > 0.4, "{flat}");
+    // Deterministic for a seed.
+    assert_eq!(eval::patch_nn_distance(&noisy, &regions, &frames, &regions, &p).value.unwrap(), noise);
+}
+
+#[test]
+fn evaluation_is_deterministic_across_thread_counts() {
+    let b = Bloom { size: 64, frames: 6 };
+    let ex = b.exemplar();
+    let masks: Vec<_> = (0..6).map(|t| b.mask(t)).collect();
+    let out: Vec<_> = (0..6).map(|t| with_alpha(&b.field(5 - t), &masks[t])).collect();
+    let opts = EvalOptions { patches: eval::PatchParams { samples: 300, ..Default::default() }, ..Default::default() };
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let a = one.install(|| eval::evaluate(&out, &ex, &masks, &opts).unwrap());
+    let b2 = eval::evaluate(&out, &ex, &masks, &opts).unwrap();
+    assert_eq!(a, b2);
+    // The report round-trips through JSON (missing values are null).
+    let json = serde_json::to_string(&a).unwrap();
+    assert!(json.contains("\"temporal_change\":null"));
+    let back: eval::Report = serde_json::from_str(&json).unwrap();
+    assert_eq!(back.summary, a.summary);
+}
+
+#[test]
+fn invalid_inputs_are_errors_not_panics() {
+    let b = Bloom { size: 48, frames: 3 };
+    let ex = b.exemplar();
+    let masks: Vec<_> = (0..3).map(|t| b.mask(t)).collect();
+    let out: Vec<_> = (0..3).map(|t| with_alpha(&b.field(t), &masks[t])).collect();
+    let o = EvalOptions::default();
+    assert!(eval::evaluate(&[], &ex, &[], &o).is_err());
+    let e = eval::evaluate(&out, &ex, &masks[..2], &o).unwrap_err().to_string();
+    assert!(e.contains("one mask per output frame (3)"), "{e}");
+    let mut wrong = masks.clone();
+    wrong[1] = Plane::filled(40, 48, 1.0);
+    let e = eval::evaluate(&out, &ex, &wrong, &o).unwrap_err().to_string();
+    assert!(e.contains("target mask 2") && e.contains("40x48"), "{e}");
+    let bad = EvalOptions { interior_margin: f32::NAN, ..Default::default() };
+    assert!(eval::evaluate(&out, &ex, &masks, &bad).unwrap_err().to_string().contains("--interior-margin"));
+    // The exemplar as the synthesis would see it with --src-scale 0.5 --src-speed 2.
+    let half = EvalOptions { exemplar_scale: Some(0.5), exemplar_step: Some(2), ..Default::default() };
+    let r = eval::evaluate(&out, &ex, &masks, &half).unwrap();
+    assert_eq!((r.exemplar.width, r.exemplar.frames, r.exemplar.step, r.exemplar.scale), (24, 2, 2, 0.5));
+    // Empty target masks: nothing to measure, but no failure.
+    let empty = vec![Plane::filled(48, 48, 0.0f32); 3];
+    let r = eval::evaluate(&out, &ex, &empty, &o).unwrap();
+    assert_eq!(r.summary.local_contrast, None);
+    assert_eq!(r.summary.patch_nn_distance, None);
+    assert!(r.summary.coverage_iou.unwrap() < 1.0);
+}
+
+#[test]
+fn plot_draws_every_series() {
+    let b = Bloom { size: 48, frames: 5 };
+    let ex = b.exemplar();
+    let masks: Vec<_> = (0..5).map(|t| b.mask(t)).collect();
+    let out: Vec<_> = (0..5).map(|t| with_alpha(&b.field(t), &masks[t])).collect();
+    let r = eval::evaluate(&out, &ex, &masks, &EvalOptions::default()).unwrap();
+    let opts = eval::plot::PlotOptions::default();
+    let img = eval::plot::render_plot(&r, &opts).unwrap();
+    assert_eq!(img.width(), 960);
+    let svg = eval::plot::plot_svg(&r, &opts);
+    assert_eq!(svg.matches("<polyline").count(), 8, "IoU, contrast, 3 palette channels, patches, temporal, motion");
+    // Pixels of the coverage line's color (#1f77b4) are drawn.
+    let blue = img
+        .data()
+        .iter()
+        .filter(|c| close(c[0], 0x1f as f32 / 255.0, 0.02) && close(c[2], 0xb4 as f32 / 255.0, 0.02))
+        .count();
+    assert!(blue > 100, "{blue}");
+}
