@@ -23,6 +23,8 @@ struct Cli {
 enum Command {
     /// Print an animation's size, frames and layers; optionally write mask and guide previews.
     Inspect(cli::inspect::Args),
+    /// Manage style exemplars: list, show, generate and import.
+    Exemplar(cli::exemplar::Args),
 }
 
 fn main() -> ExitCode {
@@ -31,6 +33,7 @@ fn main() -> ExitCode {
     let ctx = cli::Ctx { quiet: cli.quiet, verbose: cli.verbose };
     let result = match cli.command {
         Command::Inspect(args) => cli::inspect::run(args, &ctx),
+        Command::Exemplar(args) => cli::exemplar::run(args, &ctx),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
