@@ -347,13 +347,17 @@ impl Exemplar {
             let d = tmp.join(sub);
             std::fs::create_dir_all(&d).map_err(|e| Error::io(&d, e))?;
         }
-        for (i, (f, m)) in self.frames.iter().zip(&self.masks).enumerate() {
+        // PNG encoding dominates the time of a write: encode frames in parallel (the bytes
+        // do not depend on the thread count).
+        use rayon::prelude::*;
+        (0..self.frames.len()).into_par_iter().try_for_each(|i| -> Result<()> {
+            let (f, m) = (&self.frames[i], &self.masks[i]);
             let name = format!("{:04}.png", i + 1);
             let rgb: Vec<u8> = f.data().iter().flat_map(|c| c.map(to_u8)).collect();
             write_png(&tmp.join("frames").join(&name), f.width(), f.height(), image::ExtendedColorType::Rgb8, &rgb)?;
             let mask: Vec<u8> = m.data().iter().map(|&v| if v >= 0.5 { 255 } else { 0 }).collect();
-            write_png(&tmp.join("masks").join(&name), m.width(), m.height(), image::ExtendedColorType::L8, &mask)?;
-        }
+            write_png(&tmp.join("masks").join(&name), m.width(), m.height(), image::ExtendedColorType::L8, &mask)
+        })?;
         let path = tmp.join("exemplar.toml");
         let text = toml::to_string(&self.meta)
             .map_err(|e| Error::Toml { path: path.clone(), message: e.to_string() })?;

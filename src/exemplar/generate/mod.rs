@@ -306,25 +306,24 @@ impl GeneratorParams {
     fn sim_params(&self) -> SimParams {
         let pig = self.pigment.props();
         let drag = 0.01;
-        use sim::tune;
         SimParams {
-            viscosity: tune("viscosity", 0.1),
+            viscosity: 0.1,
             drag,
-            slope: tune("slope", 1.0),
+            slope: 1.0,
             tilt: [self.flow[0] * drag, self.flow[1] * drag],
-            edge_darkening: tune("eta", 0.05) * self.rim,
-            edge_sigma: tune("edge_sigma", 10.0 / 3.0),
-            diffusion: tune("diffusion", 0.03),
-            density: pig.density * tune("density", 1.0),
+            edge_darkening: 0.2 * self.rim,
+            edge_sigma: 10.0 / 3.0,
+            diffusion: 0.03,
+            density: pig.density,
             staining: pig.staining,
             granulation: (pig.granulation * self.granulation).min(1.0),
-            front_threshold: tune("front", 1.6) * (1.0 + tune("front_rim", 0.25) * self.rim) / self.bloom,
-            front_noise: tune("front_noise", 0.6),
-            source: tune("source", 0.45),
-            source_decay: tune("source_decay", 200.0),
-            load: tune("load", 0.5) * self.load,
-            load_decay: tune("load_decay", 1e9),
-            flow_suspend: tune("suspend", 0.0),
+            front_threshold: 3.5 * (1.0 + 0.25 * self.rim) / self.bloom,
+            front_noise: 0.6,
+            source: 0.8,
+            source_decay: 200.0,
+            load: 2.0 * self.load,
+            load_decay: 60.0,
+            flow_suspend: 10.0,
         }
     }
 
@@ -334,15 +333,15 @@ impl GeneratorParams {
         let r = self.drop_radius * scale;
         // Start upstream of the drift so the paint has room to travel.
         let fl = (self.flow[0].hypot(self.flow[1])).max(1e-6);
-        let shift = (self.flow[0].hypot(self.flow[1]) * 2.0).min(0.3);
+        let shift = self.flow[0].hypot(self.flow[1]).min(0.2);
         let (cx, cy) = (w * (0.5 - shift * self.flow[0] / fl), h * (0.5 - shift * self.flow[1] / fl));
         if self.drops == 1 {
             return vec![Drop { x: cx, y: cy, r }];
         }
         (0..self.drops)
             .map(|_| Drop {
-                x: cx + rng.range(-0.25, 0.25) * w,
-                y: cy + rng.range(-0.25, 0.25) * h,
+                x: cx + rng.range(-0.15, 0.15) * w,
+                y: cy + rng.range(-0.15, 0.15) * h,
                 r: r * rng.range(0.6, 1.1),
             })
             .collect()
@@ -357,17 +356,50 @@ fn render(sim: &Sim, props: &PigmentProps, granulation: f32, paper_tint: Rgb) ->
         let i = y * w + x;
         let hgt = sim.paper.height[i];
         let (g, d) = (sim.g[i], sim.d[i]);
-        let x = props.strength
-            * sim::tune("thick", 1.0)
-            * (0.5 * g + d * (1.0 + sim::tune("gran_render", 1.6) * granulation * (0.5 - hgt)).max(0.0));
+        let x = props.strength * (0.5 * g + d * (1.0 + 1.6 * granulation * (0.5 - hgt)).max(0.0));
         let (r, t) = km::layer(props.k, props.s, x);
         km::over(r, t, paper_reflectance(hgt, paper_tint)).map(km::to_srgb)
     });
-    let mask = Plane::from_fn(w, h, |x, y| {
-        let i = y * w + x;
-        if sim.wet[i] && sim.g[i] + sim.d[i] > 0.05 { 1.0 } else { 0.0 }
-    });
+    let mut inside: Vec<bool> = (0..w * h).map(|i| sim.wet[i] && sim.g[i] + sim.d[i] > 0.05).collect();
+    fill_holes(&mut inside, w, h);
+    let mask = Plane::from_fn(w, h, |x, y| if inside[y * w + x] { 1.0 } else { 0.0 });
     (rgb, mask)
+}
+
+/// Fills the holes of a mask: unpainted pixels not connected (4-neighbourhood) to the frame
+/// edge through unpainted pixels. A bloom whose paint was pushed out of its center still
+/// covers that center.
+fn fill_holes(mask: &mut [bool], w: usize, h: usize) {
+    let mut outside = vec![false; w * h];
+    let mut stack: Vec<usize> =
+        (0..w * h).filter(|&i| !mask[i] && (i % w == 0 || i % w == w - 1 || i / w == 0 || i / w == h - 1)).collect();
+    for &i in &stack {
+        outside[i] = true;
+    }
+    while let Some(i) = stack.pop() {
+        let (x, y) = (i % w, i / w);
+        let mut visit = |j: usize| {
+            if !mask[j] && !outside[j] {
+                outside[j] = true;
+                stack.push(j);
+            }
+        };
+        if x > 0 {
+            visit(i - 1);
+        }
+        if x + 1 < w {
+            visit(i + 1);
+        }
+        if y > 0 {
+            visit(i - w);
+        }
+        if y + 1 < h {
+            visit(i + w);
+        }
+    }
+    for (m, o) in mask.iter_mut().zip(&outside) {
+        *m = !o;
+    }
 }
 
 #[inline]

@@ -52,19 +52,6 @@ pub(crate) struct SimParams {
     pub flow_suspend: f32,
 }
 
-/// Temporary tuning hook: `FM_TUNE="name=value,…"` overrides (development only).
-pub(crate) fn tune(name: &str, default: f32) -> f32 {
-    std::env::var("FM_TUNE")
-        .ok()
-        .and_then(|v| {
-            v.split(',').find_map(|kv| {
-                let (k, val) = kv.split_once('=')?;
-                (k.trim() == name).then(|| val.trim().parse().ok()).flatten()
-            })
-        })
-        .unwrap_or(default)
-}
-
 /// The simulation state.
 pub(crate) struct Sim {
     pub w: usize,
@@ -431,15 +418,25 @@ impl Sim {
         }
     }
 
-    /// The wet front advances into a dry cell when the pressure of its wet neighbours beats
-    /// a threshold that is lower in the paper's valleys and freshly random every step.
+    /// The wet front advances into a dry cell when the mean pressure of the wet cells
+    /// around it (a disc of radius 2), scaled by how much of that disc is wet, beats a
+    /// threshold that is lower in the paper's valleys and freshly random every step. The disc
+    /// keeps the growth isotropic (a 4- or 8-neighbour rule grows squares and diamonds) and
+    /// rounds off thin spikes while letting bays fill in.
     fn grow_front(&mut self) {
+        const DISC: [(i32, i32); 20] = [
+            (-1, -2), (0, -2), (1, -2),
+            (-2, -1), (-1, -1), (0, -1), (1, -1), (2, -1),
+            (-2, 0), (-1, 0), (1, 0), (2, 0),
+            (-2, 1), (-1, 1), (0, 1), (1, 1), (2, 1),
+            (-1, 2), (0, 2), (1, 2),
+        ];
         let (w, h) = (self.w, self.h);
         let sp = self.params.clone();
-        let tilt_dir = {
-            let n = (sp.tilt[0] * sp.tilt[0] + sp.tilt[1] * sp.tilt[1]).sqrt();
-            if n > 0.0 { [sp.tilt[0] / n, sp.tilt[1] / n, n / sp.drag.max(1e-6)] } else { [0.0, 0.0, 0.0] }
-        };
+        let tilt_len = sp.tilt[0].hypot(sp.tilt[1]);
+        // Terminal drift speed of the tilt, and its direction.
+        let drift = tilt_len / sp.drag.max(1e-6);
+        let tdir = if tilt_len > 0.0 { [sp.tilt[0] / tilt_len, sp.tilt[1] / tilt_len] } else { [0.0, 0.0] };
         let mut newly = Vec::new();
         for y in 0..h {
             for x in 0..w {
@@ -447,35 +444,40 @@ impl Sim {
                 if self.wet[c] {
                     continue;
                 }
-                let mut best = f32::MIN;
-                for dy in -1i32..=1 {
-                    for dx in -1i32..=1 {
-                        if dx == 0 && dy == 0 {
-                            continue;
-                        }
-                        let (nx, ny) = (x as i32 + dx, y as i32 + dy);
-                        if nx < 0 || ny < 0 || nx >= w as i32 || ny >= h as i32 {
-                            continue;
-                        }
-                        let ni = ny as usize * w + nx as usize;
-                        if !self.wet[ni] {
-                            continue;
-                        }
-                        let diag = dx != 0 && dy != 0;
-                        let mut pv = self.p[ni] * if diag { 0.707 } else { 1.0 };
-                        // Downhill (along the tilt) the front advances more easily.
-                        let len = if diag { std::f32::consts::SQRT_2 } else { 1.0 };
-                        pv += 4.0 * tilt_dir[2] * (dx as f32 * tilt_dir[0] + dy as f32 * tilt_dir[1]) / len;
-                        best = best.max(pv);
-                    }
-                }
-                if best == f32::MIN {
+                // Only cells touching the wet area (8-neighbourhood) can become wet.
+                let touches = (y.saturating_sub(1)..(y + 2).min(h))
+                    .any(|yy| (x.saturating_sub(1)..(x + 2).min(w)).any(|xx| self.wet[yy * w + xx]));
+                if !touches {
                     continue;
                 }
+                let (mut n, mut psum, mut cx, mut cy) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
+                for &(dx, dy) in &DISC {
+                    let (nx, ny) = (x as i32 + dx, y as i32 + dy);
+                    if nx < 0 || ny < 0 || nx >= w as i32 || ny >= h as i32 {
+                        continue;
+                    }
+                    let ni = ny as usize * w + nx as usize;
+                    if self.wet[ni] {
+                        n += 1.0;
+                        psum += self.p[ni];
+                        cx += dx as f32;
+                        cy += dy as f32;
+                    }
+                }
+                if n == 0.0 {
+                    continue;
+                }
+                let frac = n / DISC.len() as f32;
+                let mut pressure = psum / n * (frac / 0.4).sqrt();
+                if drift > 0.0 {
+                    // Downstream of the wet area (away from its local centroid, along the
+                    // drift) the front advances more easily.
+                    let len = cx.hypot(cy).max(1e-6);
+                    pressure -= 10.0 * drift * (cx * tdir[0] + cy * tdir[1]) / len;
+                }
                 let r = self.rng.next_f32();
-                let threshold =
-                    sp.front_threshold * (0.5 + (1.0 - self.paper.smooth[c]) + sp.front_noise * r);
-                if best > threshold {
+                let threshold = sp.front_threshold * (0.5 + (1.0 - self.paper.smooth[c]) + sp.front_noise * r);
+                if pressure > threshold {
                     newly.push(c);
                 }
             }
