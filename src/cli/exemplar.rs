@@ -149,6 +149,19 @@ pub struct ImportArgs {
     pub sheet: Option<PathBuf>,
 }
 
+/// `println!` that ends quietly when stdout is closed (`exemplar list | head`).
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        if let Err(e) = writeln!(std::io::stdout().lock(), $($arg)*) {
+            if e.kind() == std::io::ErrorKind::BrokenPipe {
+                std::process::exit(0);
+            }
+            return Err(anyhow::Error::from(e).context("could not write to stdout"));
+        }
+    }};
+}
+
 fn parse_pigment(s: &str) -> Result<Pigment, String> {
     s.parse().map_err(|e: fluidymation::Error| e.to_string())
 }
@@ -186,15 +199,15 @@ pub fn run(args: Args, ctx: &Ctx) -> anyhow::Result<()> {
 fn list(search: &SearchPath) -> anyhow::Result<()> {
     let all = exemplar::list(search);
     if all.is_empty() {
-        println!("no exemplars found");
+        outln!("no exemplars found");
         return Ok(());
     }
     let width = all.iter().map(|i| i.name.len()).max().unwrap_or(4).max(4);
-    println!("{:width$}  {:>9}  {:>6}  {:>6}  {:40}  WHERE", "NAME", "SIZE", "FRAMES", "BORDER", "DESCRIPTION");
+    outln!("{:width$}  {:>9}  {:>6}  {:>6}  {:40}  WHERE", "NAME", "SIZE", "FRAMES", "BORDER", "DESCRIPTION");
     for i in all {
         let size = format!("{}x{}", i.size.0, i.size.1);
         let hidden = if i.shadowed { " [hidden by an earlier one]" } else { "" };
-        println!(
+        outln!(
             "{:width$}  {:>9}  {:>6}  {:>6.1}  {:40}  {}{}",
             i.name, size, i.frames, i.border_width, i.description, i.location, hidden
         );
@@ -202,38 +215,41 @@ fn list(search: &SearchPath) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn print_meta(ex: &Exemplar) {
+fn print_meta(ex: &Exemplar) -> anyhow::Result<()> {
     let m = &ex.meta;
-    println!("name:         {}", m.name);
-    println!("description:  {}", m.description);
+    outln!("name:         {}", m.name);
+    outln!("description:  {}", m.description);
     if let Some(d) = &ex.dir {
-        println!("folder:       {}", d.display());
+        outln!("folder:       {}", d.display());
     } else {
-        println!("folder:       (bundled)");
+        outln!("folder:       (bundled)");
     }
-    println!("size:         {}x{} px, {} frames at {} fps", ex.width(), ex.height(), ex.len(), m.fps);
-    println!("paper:        {}", m.paper);
-    println!("pigment:      {}", m.pigment);
-    println!("border width: {} px", m.border_width);
-    println!("scale, speed: {}, {}", m.scale, m.speed);
+    outln!("size:         {}x{} px, {} frames at {} fps", ex.width(), ex.height(), ex.len(), m.fps);
+    outln!("paper:        {}", m.paper);
+    outln!("pigment:      {}", m.pigment);
+    outln!("border width: {} px", m.border_width);
+    outln!("scale, speed: {}, {}", m.scale, m.speed);
     if let Some(seed) = m.seed {
-        println!("seed:         {seed}");
+        outln!("seed:         {seed}");
     }
     if let Some(g) = &m.generator {
         let mut keys: Vec<_> = g.iter().map(|(k, v)| format!("{k}={v}")).collect();
         keys.sort();
-        println!("generator:    {}", keys.join(" "));
+        outln!("generator:    {}", keys.join(" "));
     }
-    println!("license:      {}", m.license);
-    println!("origin:       {}", m.origin);
+    outln!("license:      {}", m.license);
+    outln!("origin:       {}", m.origin);
+    Ok(())
 }
 
 fn show(a: ShowArgs, search: &SearchPath) -> anyhow::Result<()> {
     let ex = exemplar::find(&a.name, search).with_context(|| format!("could not load exemplar '{}'", a.name))?;
-    print_meta(&ex);
+    print_meta(&ex)?;
+    let est = exemplar::border::estimate_border_width(&ex);
+    outln!("border width estimated from the frames: {} px", est.width);
     if let Some(out) = a.output {
         write_sheet(&ex, &out, a.columns, a.cell)?;
-        println!("contact sheet: {}", out.display());
+        outln!("contact sheet: {}", out.display());
     }
     Ok(())
 }

@@ -14,11 +14,11 @@
 //!    that density and its 3×3 mean (granulation, fine structure);
 //! 3. their means as a function of the distance (1-pixel bins, all frames pooled, bins with
 //!    fewer than 30 pixels dropped), smoothed with a `[1 2 1]` filter;
-//! 4. the *interior level* of each profile: its median over the deeper half of the valid
-//!    distances; the deviation `e(k) = |f(k) − interior|`;
-//! 5. for each statistic, the smallest distance `k₀` beyond which `e` stays below 25 % of its
-//!    largest value near the edge; `b` is the larger of the two `k₀`, at least 2 px and at
-//!    most half the deepest valid distance.
+//! 4. for each profile, the distance `k₀` where it stops changing: from `k₀` on its slope
+//!    stays below 20 % of its steepest slope near the edge for at least 3 px (a slow
+//!    large-scale gradient towards a bloom's light center does not count as border);
+//! 5. `b` is the larger of the two `k₀`, at least 2 px and at most half the deepest valid
+//!    distance (near-edge = that first half).
 //!
 //! The distances are measured on the raw masks; the engine pre-processes masks (blur σ 8,
 //! threshold below 0.5) which moves the edge outwards by a pixel or two, well within the
@@ -130,24 +130,21 @@ fn smooth121(v: &[f32]) -> Vec<f32> {
         .collect()
 }
 
-/// Where a profile stops changing: the smallest `k₀ ≤ end` after which the deviation from
-/// the interior level stays below 25 % of its maximum over `0..=end`.
-fn settle_distance(profile: &[f32], end: usize, interior_from: usize) -> usize {
-    let mut deep: Vec<f32> = profile[interior_from..].to_vec();
-    deep.sort_by(|a, b| a.total_cmp(b));
-    let interior = deep[deep.len() / 2];
-    let dev: Vec<f32> = profile.iter().map(|&f| (f - interior).abs()).collect();
-    let peak = dev[..=end].iter().fold(0.0f32, |m, &d| m.max(d));
-    if peak <= 1e-6 {
+/// Where a profile stops changing: the smallest distance `k₀` from which on its slope
+/// (central differences) stays below 20 % of the steepest slope near the edge (over
+/// `0..=end`) for at least 3 px.
+fn settle_distance(profile: &[f32], end: usize) -> usize {
+    let n = profile.len();
+    let slope = |k: usize| -> f32 {
+        let (a, b) = (k.saturating_sub(1), (k + 1).min(n - 1));
+        (profile[b] - profile[a]) / (b - a).max(1) as f32
+    };
+    let slopes: Vec<f32> = (0..n).map(|k| slope(k).abs()).collect();
+    let peak = slopes[..=end].iter().fold(0.0f32, |m, &d| m.max(d));
+    if peak <= 1e-9 {
         return 0;
     }
-    let mut k0 = 0;
-    for (k, &d) in dev[..=end].iter().enumerate() {
-        if d > 0.25 * peak {
-            k0 = k + 1;
-        }
-    }
-    k0
+    (0..=end).find(|&k| slopes[k..(k + 3).min(n)].iter().all(|&d| d < 0.2 * peak)).unwrap_or(end)
 }
 
 /// Estimates the border width of `ex` from how its texture changes with the distance from
@@ -203,7 +200,11 @@ pub fn estimate_border_width(ex: &Exemplar) -> BorderEstimate {
     }
     let end = (valid - 1) / 2;
     let (sd, sc) = (smooth121(&darkness), smooth121(&contrast));
-    let k0 = settle_distance(&sd, end, end).max(settle_distance(&sc, end, end));
+    let (kd, kc) = (settle_distance(&sd, end), settle_distance(&sc, end));
+    log::debug!("border: darkness settles at {kd} px, contrast at {kc} px (of {valid} valid distances)");
+    log::debug!("border: darkness profile {:?}", sd.iter().map(|v| (v * 1000.0).round() / 1000.0).collect::<Vec<_>>());
+    log::debug!("border: contrast profile {:?}", sc.iter().map(|v| (v * 1000.0).round() / 1000.0).collect::<Vec<_>>());
+    let k0 = kd.max(kc);
     let width = (k0 as f32).clamp(2.0, end as f32);
     BorderEstimate { width: (width * 2.0).round() / 2.0, darkness, contrast, counts }
 }

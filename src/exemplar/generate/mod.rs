@@ -159,9 +159,9 @@ pub struct GeneratorParams {
     /// Bloom speed: how fast the wet front runs (1 = normal, 2 = a fast burst, 0.5 = a slow
     /// bloom). Default: 1. Range: 0.25–4.
     pub bloom: f32,
-    /// Rim strength: edge darkening η relative to the recipe's 0.05, and how far pigment
-    /// catches up with the front (0 = no dark rim, 1 = normal, 3 = strong). Default: 1.
-    /// Range: 0–4.
+    /// Rim strength: scales edge darkening η (0.2 × rim) and raises the wet-front threshold
+    /// so pigment catches up with the front (0 = no dark rim, 1 = normal, 3 = strong).
+    /// Default: 1. Range: 0–4.
     pub rim: f32,
     /// Directional drift of the water (a tilted sheet), pixels per step, `[x, y]` with y
     /// pointing down. Default: `[0, 0]`. Each component in −0.5–0.5.
@@ -474,23 +474,31 @@ pub fn generate(params: &GeneratorParams, name: &str, progress: &dyn Progress) -
 
 /// A one-line description of what the parameters make.
 pub fn describe(p: &GeneratorParams) -> String {
-    let speed = if p.bloom >= 1.5 {
+    let speed = if p.bloom >= 1.3 {
         "fast"
-    } else if p.bloom <= 0.75 {
+    } else if p.bloom <= 0.8 {
         "slow"
     } else {
         "steady"
     };
-    let rim = if p.rim >= 2.0 {
-        ", strong rims"
-    } else if p.rim <= 0.5 {
-        ", soft edges"
-    } else {
-        ""
-    };
+    let mut extras = Vec::new();
+    if p.granulation * p.pigment.props().granulation >= 1.2 || p.grain >= 1.5 {
+        extras.push("granulating");
+    }
+    if p.rim >= 2.0 {
+        extras.push("strong dark rims");
+    } else if p.rim <= 0.6 {
+        extras.push("soft feathered edges");
+    }
+    if p.flow[0] != 0.0 || p.flow[1] != 0.0 {
+        extras.push("drifting with the flow");
+    }
+    if p.drying > 0.0 {
+        extras.push("dries at the end");
+    }
     let drops = if p.drops > 1 { format!(" of {} drops", p.drops) } else { String::new() };
-    let flow = if p.flow[0] != 0.0 || p.flow[1] != 0.0 { ", drifting" } else { "" };
-    format!("generated: {speed} {} bloom{drops}{rim}{flow}", p.pigment)
+    let extras = if extras.is_empty() { String::new() } else { format!(", {}", extras.join(", ")) };
+    format!("generated {speed} {} bloom{drops}{extras}", p.pigment)
 }
 
 #[cfg(test)]
