@@ -40,7 +40,11 @@ fn main() {
         let name = ex.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         println!("cargo:rerun-if-changed={}", ex.display());
         let toml = ex.join("exemplar.toml");
-        let _ = writeln!(out, "    BundledExemplar {{\n        name: {name:?},\n        toml: include_str!({:?}),", toml.display().to_string());
+        let _ = writeln!(
+            out,
+            "    BundledExemplar {{\n        name: {name:?},\n        toml: include_str!({:?}),",
+            toml.display().to_string()
+        );
         for sub in ["frames", "masks"] {
             println!("cargo:rerun-if-changed={}", ex.join(sub).display());
             let _ = writeln!(out, "        {sub}: &[");

@@ -179,9 +179,11 @@ fn parse_pair(s: &str) -> Result<(f32, f32), String> {
 }
 
 fn parse_crop(s: &str) -> Result<[usize; 4], String> {
-    let v: Vec<usize> = s.split(',').map(|p| p.trim().parse::<usize>()).collect::<Result<_, _>>().map_err(|_| {
-        format!("'{s}' is not X,Y,W,H in whole pixels (e.g. 100,50,400,400)")
-    })?;
+    let v: Vec<usize> = s
+        .split(',')
+        .map(|p| p.trim().parse::<usize>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("'{s}' is not X,Y,W,H in whole pixels (e.g. 100,50,400,400)"))?;
     v.try_into().map_err(|_| format!("'{s}' is not X,Y,W,H (four numbers)"))
 }
 
@@ -209,7 +211,13 @@ fn list(search: &SearchPath) -> anyhow::Result<()> {
         let hidden = if i.shadowed { " [hidden by an earlier one]" } else { "" };
         outln!(
             "{:width$}  {:>9}  {:>6}  {:>6.1}  {:40}  {}{}",
-            i.name, size, i.frames, i.border_width, i.description, i.location, hidden
+            i.name,
+            size,
+            i.frames,
+            i.border_width,
+            i.description,
+            i.location,
+            hidden
         );
     }
     Ok(())

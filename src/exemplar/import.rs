@@ -9,9 +9,10 @@
 //!    `max_c max(0, −ln(I_c / paper_c))` (the channel the pigment absorbs most), blurred with
 //!    σ = 1 px to calm the paper grain;
 //! 4. **threshold**, chosen automatically: Otsu's threshold over the measure of all frames
-//!    gives confident paint; it is then grown (hysteresis) into connected pixels above a low
-//!    threshold, the paper's own noise level (median + 4 × MAD of the edge ring's measure),
-//!    so faint, feathered fronts stay attached to the paint;
+//!    gives confident paint; it is then grown (hysteresis) into connected pixels whose
+//!    unblurred measure is above a low threshold, the paper's own noise level (median + 4 ×
+//!    MAD of the edge ring's unblurred measure), so faint, feathered fronts stay attached to
+//!    the paint while the blur does not widen dark rims;
 //! 5. **clean-up**: a 3×3-majority-like smoothing (blur σ = 1, threshold ½), then specks
 //!    (components smaller than `min_area`) removed and equally small holes filled.
 //!
@@ -173,11 +174,7 @@ pub fn from_frames(frames: Vec<Plane<Rgb>>, files: &[PathBuf], opts: &ImportOpti
         dir: None,
         meta: ExemplarMeta {
             name: opts.name.clone(),
-            description: if opts.description.is_empty() {
-                "imported footage".into()
-            } else {
-                opts.description.clone()
-            },
+            description: if opts.description.is_empty() { "imported footage".into() } else { opts.description.clone() },
             fps: opts.fps,
             paper: super::hex_color(report.paper),
             pigment,
@@ -278,11 +275,12 @@ pub fn extract_masks(frames: &[Plane<Rgb>], opts: &ImportOptions) -> Result<(Vec
     };
     let (w, h) = first.size();
     let paper = estimate_paper(frames);
-    let measures: Vec<Plane<f32>> =
-        frames.iter().map(|f| img::gaussian_blur(&f.map(|c| measure(c, paper)), 1.0)).collect();
-    // Paper noise level from the edge rings.
+    let raw: Vec<Plane<f32>> = frames.iter().map(|f| f.map(|c| measure(c, paper))).collect();
+    let measures: Vec<Plane<f32>> = raw.iter().map(|m| img::gaussian_blur(m, 1.0)).collect();
+    // Paper noise level from the edge rings, on the unblurred measure (the low threshold is
+    // applied to it, so the blur cannot spread dark rims outwards).
     let idx = ring(w, h);
-    let mut noise: Vec<f32> = measures.iter().flat_map(|m| idx.iter().map(|&i| m.data()[i])).collect();
+    let mut noise: Vec<f32> = raw.iter().flat_map(|m| idx.iter().map(|&i| m.data()[i])).collect();
     noise.sort_by(|a, b| a.total_cmp(b));
     let med = noise[noise.len() / 2];
     let mut dev: Vec<f32> = noise.iter().map(|v| (v - med).abs()).collect();
@@ -303,16 +301,18 @@ pub fn extract_masks(frames: &[Plane<Rgb>], opts: &ImportOptions) -> Result<(Vec
         }
     };
     let min_area = opts.min_area.unwrap_or(((w * h) as f32 * 0.0005) as usize).max(12);
-    let masks = measures.iter().map(|m| clean(&hysteresis(m, high, low), w, h, min_area)).collect();
+    let masks = measures.iter().zip(&raw).map(|(m, r)| clean(&hysteresis(m, r, high, low), w, h, min_area)).collect();
     Ok((masks, MaskReport { paper, high, low }))
 }
 
-/// Pixels above `low` connected (8-neighbourhood) to a pixel above `high`.
-fn hysteresis(m: &Plane<f32>, high: f32, low: f32) -> Vec<bool> {
+/// Pixels whose raw measure `r` is above `low`, connected (8-neighbourhood) to a pixel
+/// whose smoothed measure `m` is above `high`.
+fn hysteresis(m: &Plane<f32>, r: &Plane<f32>, high: f32, low: f32) -> Vec<bool> {
     let (w, h) = m.size();
-    let d = m.data();
+    let d = r.data();
+    let m = m.data();
     let mut out = vec![false; w * h];
-    let mut stack: Vec<usize> = (0..w * h).filter(|&i| d[i] >= high).collect();
+    let mut stack: Vec<usize> = (0..w * h).filter(|&i| m[i] >= high).collect();
     for &i in &stack {
         out[i] = true;
     }
@@ -342,7 +342,8 @@ fn clean(mask: &[bool], w: usize, h: usize, min_area: usize) -> Plane<f32> {
     let mut m: Vec<bool> = smooth.data().iter().map(|&v| v >= 0.5).collect();
     remove_small(&mut m, w, h, min_area, true);
     remove_small(&mut m, w, h, min_area, false);
-    Plane::from_vec(w, h, m.into_iter().map(|b| if b { 1.0 } else { 0.0 }).collect()).unwrap_or_else(|| Plane::new(w, h))
+    Plane::from_vec(w, h, m.into_iter().map(|b| if b { 1.0 } else { 0.0 }).collect())
+        .unwrap_or_else(|| Plane::new(w, h))
 }
 
 /// Flips components of value `value` (4-connected) smaller than `min_area` pixels. Holes

@@ -282,13 +282,20 @@ impl Exemplar {
         if self.frames.len() < 2 || self.frames.len() != self.masks.len() {
             return Err(Error::exemplar(
                 &label,
-                format!("needs at least 2 frames and one mask per frame ({} frames, {} masks)", self.frames.len(), self.masks.len()),
+                format!(
+                    "needs at least 2 frames and one mask per frame ({} frames, {} masks)",
+                    self.frames.len(),
+                    self.masks.len()
+                ),
             ));
         }
         let size = self.frames[0].size();
         for (i, (f, m)) in self.frames.iter().zip(&self.masks).enumerate() {
             if f.size() != size || m.size() != size {
-                return Err(Error::exemplar(&label, format!("frame {} is not {}x{} like frame 1", i + 1, size.0, size.1)));
+                return Err(Error::exemplar(
+                    &label,
+                    format!("frame {} is not {}x{} like frame 1", i + 1, size.0, size.1),
+                ));
             }
             if !m.data().iter().any(|&v| v >= 0.5) {
                 return Err(Error::exemplar(&label, format!("mask {} is empty", i + 1)));
@@ -313,7 +320,8 @@ impl Exemplar {
         };
         std::fs::create_dir_all(&parent).map_err(|e| Error::io(&parent, e))?;
         let base = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "exemplar".into());
-        let unique = format!("{}-{}", std::process::id(), SAVE_COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed));
+        let unique =
+            format!("{}-{}", std::process::id(), SAVE_COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed));
         let tmp = parent.join(format!(".{base}.partial-{unique}"));
         let result = self.write_into(&tmp);
         if let Err(e) = result {
@@ -359,8 +367,8 @@ impl Exemplar {
             write_png(&tmp.join("masks").join(&name), m.width(), m.height(), image::ExtendedColorType::L8, &mask)
         })?;
         let path = tmp.join("exemplar.toml");
-        let text = toml::to_string(&self.meta)
-            .map_err(|e| Error::Toml { path: path.clone(), message: e.to_string() })?;
+        let text =
+            toml::to_string(&self.meta).map_err(|e| Error::Toml { path: path.clone(), message: e.to_string() })?;
         img::atomic_write(&path, |w| w.write_all(text.as_bytes()))
     }
 

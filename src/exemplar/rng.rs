@@ -59,7 +59,9 @@ pub fn mix(mut z: u64) -> u64 {
 /// A uniform value in `[0, 1)` for the lattice point `(x, y)` of noise layer `seed`.
 #[inline]
 pub fn lattice(seed: u64, x: i64, y: i64) -> f32 {
-    let h = mix(seed ^ mix((x as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ (y as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F)));
+    let h = mix(
+        seed ^ mix((x as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ (y as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F))
+    );
     (h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
 }
 

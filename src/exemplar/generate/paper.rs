@@ -87,9 +87,8 @@ pub(crate) fn make(w: usize, h: usize, grain: f32, rng: &mut SplitMix64) -> Pape
     let mut fibre = blur_xy(&fibre, w, h, 0.6, 0.6);
     normalize(&mut fibre);
     let fibre_mean = fibre.iter().sum::<f32>() / n as f32;
-    let mut height: Vec<f32> = (0..n)
-        .map(|i| 0.6 * fbm[i] + grain * (0.4 * tooth[i] + 0.5 * (fibre[i] - fibre_mean)))
-        .collect();
+    let mut height: Vec<f32> =
+        (0..n).map(|i| 0.6 * fbm[i] + grain * (0.4 * tooth[i] + 0.5 * (fibre[i] - fibre_mean))).collect();
     normalize(&mut height);
     let mut smooth = blur_xy(&height, w, h, 1.5, 1.5);
     normalize(&mut smooth);
