@@ -318,9 +318,9 @@ impl Sim {
         let blurred = blur_xy(&m, w, h, self.params.edge_sigma, self.params.edge_sigma);
         // While drying, evaporation at the rim pulls harder (the coffee-ring effect).
         let eta = if growing { self.params.edge_darkening } else { 2.0 * self.params.edge_darkening };
-        for i in 0..w * h {
-            if self.wet[i] {
-                self.p[i] -= eta * (1.0 - blurred[i]);
+        for ((p, &wet), &b) in self.p.iter_mut().zip(&self.wet).zip(&blurred) {
+            if wet {
+                *p -= eta * (1.0 - b);
             }
         }
     }
