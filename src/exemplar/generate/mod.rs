@@ -3,14 +3,14 @@
 //! Kubelka–Munk, following the project's recipe (`shared/notes/watercolor-generator.md`).
 //!
 //! Pipeline per exemplar:
-//! 1. **paper** ([`paper`]): a height field of cloudy fBm, fine tooth and random fibres;
-//! 2. **simulation** ([`sim`]): staggered-grid shallow-water velocities pushed downhill and by
+//! 1. **paper** (`paper`): a height field of cloudy fBm, fine tooth and random fibres;
+//! 2. **simulation** (`sim`): staggered-grid shallow-water velocities pushed downhill and by
 //!    pressure, divergence relaxation with the drop as a water source, edge darkening (lower
 //!    pressure near the rim), upwind pigment transport, paper-guided diffusion, Curtis's
 //!    adsorption/desorption (granulation), and a wet front that advances where neighbouring
 //!    pressure beats a paper- and noise-dependent threshold; an optional drying phase at the
 //!    end freezes the front and lets pigment pile up at the rim;
-//! 3. **rendering** ([`km`]): one Kubelka–Munk layer of suspended + deposited pigment over
+//! 3. **rendering** (`km`): one Kubelka–Munk layer of suspended + deposited pigment over
 //!    the paper's reflectance, converted to sRGB; the mask is where pigment is visible.
 //!
 //! Everything is single-threaded and driven by one [`SplitMix64`](super::rng::SplitMix64)
