@@ -28,6 +28,8 @@ enum Command {
     /// Measure a stylized sequence against its exemplar and target masks (coverage, texture,
     /// palette, temporal change, motion); print a table or JSON, optionally draw a chart.
     Eval(cli::eval::Args),
+    /// Manage style exemplars: list, show, generate and import.
+    Exemplar(cli::exemplar::Args),
 }
 
 fn main() -> ExitCode {
@@ -38,6 +40,7 @@ fn main() -> ExitCode {
         Command::Inspect(args) => cli::inspect::run(args, &ctx),
         Command::Synth(args) => cli::synth::run(args, &ctx),
         Command::Eval(args) => cli::eval::run(args, &ctx),
+        Command::Exemplar(args) => cli::exemplar::run(args, &ctx),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

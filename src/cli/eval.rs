@@ -59,21 +59,9 @@ pub struct Args {
     pub seed: u64,
 }
 
-/// Finds the exemplar given on the command line.
-///
-/// NAME LOOKUP — the one call site to change: once exemplars can be looked up by name (the
-/// exemplar registry), try the name here before falling back to a folder path. Until then only
-/// a folder is accepted.
+/// Finds the exemplar given on the command line: a name or a folder.
 fn load_exemplar(arg: &str) -> anyhow::Result<Exemplar> {
-    let path = Path::new(arg);
-    if path.is_dir() {
-        return Exemplar::load(path).with_context(|| format!("could not load the exemplar '{}'", arg));
-    }
-    bail!(
-        "'{}' is not an exemplar folder; pass the folder holding exemplar.toml, frames/ and masks/ \
-         (looking exemplars up by name is not supported by `eval` yet)",
-        arg
-    )
+    super::find_exemplar(arg, &[])
 }
 
 /// Loads every file with `load`, in parallel, reporting the first failure in sequence order.

@@ -1,6 +1,7 @@
 //! Command implementations; each subcommand has its own file with its `Args` and `run`.
 
 pub mod eval;
+pub mod exemplar;
 pub mod inspect;
 pub mod params;
 pub mod progress;
@@ -66,12 +67,10 @@ pub fn report_error(err: &anyhow::Error) -> ExitCode {
     if cancelled { ExitCode::from(130) } else { ExitCode::from(1) }
 }
 
-/// Finds an exemplar by name or folder path.
-pub fn find_exemplar(
-    key: &str,
-    _extra_dirs: &[std::path::PathBuf],
-) -> anyhow::Result<fluidymation::exemplar::Exemplar> {
+/// Finds an exemplar by name (in `extra_dirs`, `FLUIDYMATION_EXEMPLARS`, the user's folder and
+/// the bundled set) or by folder path.
+pub fn find_exemplar(key: &str, extra_dirs: &[std::path::PathBuf]) -> anyhow::Result<fluidymation::exemplar::Exemplar> {
     use anyhow::Context;
-    let path = std::path::Path::new(key);
-    fluidymation::exemplar::Exemplar::load(path).with_context(|| format!("could not load exemplar '{}'", key))
+    let search = fluidymation::exemplar::SearchPath::standard(extra_dirs);
+    fluidymation::exemplar::find(key, &search).with_context(|| format!("could not load exemplar '{}'", key))
 }
