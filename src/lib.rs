@@ -17,10 +17,12 @@
 #![warn(missing_docs)]
 
 pub mod anim;
+pub mod composite;
 pub mod error;
 pub mod exemplar;
 pub mod guide;
 pub mod img;
+pub mod output;
 pub mod progress;
 pub mod seq;
 

@@ -1,0 +1,1 @@
+//! Writing results: numbered PNG frames and GIF animations.
