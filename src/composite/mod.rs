@@ -75,7 +75,7 @@ pub use recolor::{INTENSITY_FLOOR, MAX_AMOUNT, MIN_REFERENCE_DENSITY, Pigment, S
 
 use crate::error::{Error, Result};
 use crate::img::{Plane, Rgb, Rgba};
-use color::{rgb_to_linear, to_linear, to_srgb};
+use color::{fast_exp, fast_ln, rgb_to_linear};
 use rayon::prelude::*;
 
 /// How a stylized layer is recolored (`--recolor`).
@@ -248,7 +248,7 @@ impl BasePixel {
         let premultiplied = premultiply(c);
         let a = premultiplied[3];
         let base = [0, 1, 2].map(|i| (premultiplied[i] + 1.0 - a).clamp(recolor::INTENSITY_FLOOR, 1.0));
-        BasePixel { premultiplied, base, ln_base: base.map(f32::ln) }
+        BasePixel { premultiplied, base, ln_base: base.map(fast_ln) }
     }
 }
 
@@ -256,7 +256,8 @@ impl BasePixel {
 #[inline]
 fn premultiply(c: Rgba) -> [f32; 4] {
     let a = color::sanitize(c[3]);
-    [to_linear(c[0]) * a, to_linear(c[1]) * a, to_linear(c[2]) * a, a]
+    let l = rgb_to_linear([c[0], c[1], c[2]]);
+    [l[0] * a, l[1] * a, l[2] * a, a]
 }
 
 /// Premultiplied linear → straight sRGB RGBA.
@@ -266,7 +267,9 @@ fn unpremultiply(p: [f32; 4]) -> Rgba {
     if a <= 1e-7 {
         return [0.0; 4];
     }
-    [to_srgb(p[0] / a), to_srgb(p[1] / a), to_srgb(p[2] / a), a]
+    let inv = 1.0 / a;
+    let c = color::rgb_to_srgb([p[0] * inv, p[1] * inv, p[2] * inv]);
+    [c[0], c[1], c[2], a]
 }
 
 #[inline]
@@ -308,9 +311,9 @@ fn draw_stylized(layer: &StylizedLayer, y: usize, acc: &mut [[f32; 4]], base: &[
     if y < y0 || y >= y1 {
         return;
     }
-    let row = &layer.px[y * layer.width..(y + 1) * layer.width];
-    for x in x0..x1 {
-        let p = row[x];
+    let bw = x1 - x0;
+    let row = &layer.px[(y - y0) * bw..(y - y0 + 1) * bw];
+    for (x, &p) in (x0..x1).zip(row) {
         if !p.on {
             continue;
         }
@@ -330,9 +333,14 @@ fn draw_stylized(layer: &StylizedLayer, y: usize, acc: &mut [[f32; 4]], base: &[
                     }
                 }
                 let beta = beta.min(1.0);
-                let ln_base =
-                    if beta > 0.0 { [0, 1, 2].map(|i| (b.base[i] + beta * (1.0 - b.base[i])).ln()) } else { b.ln_base };
-                let t = [0, 1, 2].map(|i| (p.amount * (p.ln[i] - ln_base[i]).min(0.0)).exp());
+                let ln_base = if beta > 0.0 {
+                    let lifted = |i: usize| fast_ln(b.base[i] + beta * (1.0 - b.base[i]));
+                    [lifted(0), lifted(1), lifted(2)]
+                } else {
+                    b.ln_base
+                };
+                let t_at = |i: usize| fast_exp(p.amount * (p.ln[i] - ln_base[i]).min(0.0));
+                let t = [t_at(0), t_at(1), t_at(2)];
                 let lift = beta * p.amount.min(1.0);
                 if lift > 0.0 {
                     let k = 1.0 - lift;
@@ -346,7 +354,11 @@ fn draw_stylized(layer: &StylizedLayer, y: usize, acc: &mut [[f32; 4]], base: &[
                     continue;
                 }
                 let s = p.amount.max(1.0);
-                let c = if s == 1.0 { p.color } else { p.ln.map(|l| (s * l).exp()) };
+                let c = if s == 1.0 {
+                    p.color
+                } else {
+                    [fast_exp(s * p.ln[0]), fast_exp(s * p.ln[1]), fast_exp(s * p.ln[2])]
+                };
                 let k = 1.0 - o;
                 *a = [o * c[0] + k * a[0], o * c[1] + k * a[1], o * c[2] + k * a[2], o + k * a[3]];
             }

@@ -2,7 +2,7 @@
 //! and the layer's own colors.
 
 use super::Recolor;
-use super::color::{rgb_to_linear, rgb_to_srgb, sanitize, srgb_to_linear};
+use super::color::{fast_ln, ln_linear, rgb_to_linear, rgb_to_srgb, sanitize, srgb_to_linear};
 use crate::error::{Error, Result};
 use crate::exemplar::Exemplar;
 use crate::img::{Mask, Plane, Rgb, Rgba, sample_bilinear};
@@ -39,7 +39,7 @@ impl Pigment {
     /// least [`MIN_REFERENCE_DENSITY`].
     pub fn new(paper: Rgb, reference: [f32; 3]) -> Pigment {
         let paper = paper.map(sanitize);
-        let paper_ln = paper.map(|v| srgb_to_linear(v).max(INTENSITY_FLOOR).ln());
+        let paper_ln = paper.map(|v| fast_ln(srgb_to_linear(v).max(INTENSITY_FLOOR)));
         let mut k = reference.map(|v| if v.is_finite() { v.max(0.0) } else { 0.0 });
         let mean = (k[0] + k[1] + k[2]) / 3.0;
         if mean < MIN_REFERENCE_DENSITY {
@@ -88,8 +88,8 @@ impl Pigment {
     /// lighter than the paper).
     #[inline]
     pub fn density(&self, c: Rgb) -> [f32; 3] {
-        let lin = rgb_to_linear(c);
-        [0, 1, 2].map(|i| self.paper_ln[i] - lin[i].max(INTENSITY_FLOOR).ln())
+        let ln = ln_linear(c);
+        [self.paper_ln[0] - ln[0], self.paper_ln[1] - ln[1], self.paper_ln[2] - ln[2]]
     }
 
     /// The pigment amount `a` of an sRGB color (1 = the reference density).
@@ -134,8 +134,9 @@ pub struct StylizedLayer {
     pub(crate) mode: Recolor,
     pub(crate) width: usize,
     pub(crate) height: usize,
-    /// `[x0, y0, x1, y1)`: bounding box of the mask (empty when `x0 >= x1`).
+    /// `[x0, y0, x1, y1)`: bounding box of the mask (all 0 when the mask is empty).
     pub(crate) bbox: [usize; 4],
+    /// The pixels of the bounding box, row-major.
     pub(crate) px: Vec<LayerPixel>,
 }
 
@@ -169,7 +170,10 @@ impl StylizedLayer {
     }
 
     fn pixel(&self, x: usize, y: usize) -> Option<LayerPixel> {
-        (x < self.width && y < self.height).then(|| self.px[y * self.width + x]).filter(|p| p.on)
+        let [x0, y0, x1, y1] = self.bbox;
+        ((x0..x1).contains(&x) && (y0..y1).contains(&y))
+            .then(|| self.px[(y - y0) * (x1 - x0) + x - x0])
+            .filter(|p| p.on)
     }
 
     /// The layer alone over a transparent background, straight sRGB RGBA (for
@@ -254,31 +258,52 @@ pub fn recolor_with(
     check_size("mask size", mask.size(), stylized.size())?;
     check_size("flat layer size", flat.size(), stylized.size())?;
     let (w, h) = stylized.size();
-    let tint = if mode == Recolor::None { None } else { Some(extended_tint(flat, mask)) };
+    let bbox = bounding_box(mask);
+    let [x0, y0, x1, y1] = bbox;
+    let bw = x1 - x0;
+    // The tint is computed on the box grown by a margin, so colors just outside it still
+    // reach the mask's edge.
+    let grown = [
+        x0.saturating_sub(TINT_MARGIN),
+        y0.saturating_sub(TINT_MARGIN),
+        (x1 + TINT_MARGIN).min(w),
+        (y1 + TINT_MARGIN).min(h),
+    ];
+    let tint = if mode == Recolor::None || bw == 0 { None } else { Some(extended_tint(flat, mask, grown)) };
     let paper_lin = rgb_to_linear(pigment.paper());
-    let mut px = vec![LayerPixel::default(); w * h];
-    if w > 0 {
-        px.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-            for (x, p) in row.iter_mut().enumerate() {
+    let mut px = vec![LayerPixel::default(); bw * (y1 - y0)];
+    if bw > 0 {
+        px.par_chunks_mut(bw).enumerate().for_each(|(row, out)| {
+            let y = y0 + row;
+            // Flat fills repeat one color: reuse its logarithm.
+            let mut last: Option<(Rgb, Rgb)> = None;
+            for (x, p) in (x0..x1).zip(out.iter_mut()) {
                 if !mask.get(x, y) {
                     continue;
                 }
                 let c = stylized.get(x, y);
                 let (amount, color) = match &tint {
-                    Some(t) => (pigment.amount(c), t.get(x, y)),
+                    Some(t) => (pigment.amount(c), t.get(x - grown[0], y - grown[1])),
                     None => {
                         let lin = rgb_to_linear(c);
                         (1.0, [0, 1, 2].map(|i| (lin[i] / paper_lin[i].max(INTENSITY_FLOOR)).min(1.0)))
                     }
                 };
                 let color = color.map(|v| sanitize(v).max(INTENSITY_FLOOR));
-                *p = LayerPixel { on: true, amount, color, ln: color.map(f32::ln) };
+                let ln = match last {
+                    Some((c, ln)) if c == color => ln,
+                    _ => [fast_ln(color[0]), fast_ln(color[1]), fast_ln(color[2])],
+                };
+                last = Some((color, ln));
+                *p = LayerPixel { on: true, amount, color, ln };
             }
         });
     }
-    let bbox = bounding_box(mask);
     Ok(StylizedLayer { mode, width: w, height: h, bbox, px })
 }
+
+/// Margin (pixels) around the mask's bounding box from which flat colors are gathered.
+const TINT_MARGIN: usize = 16;
 
 /// `[x0, y0, x1, y1)` of the `true` pixels (`[0, 0, 0, 0]` when there are none).
 fn bounding_box(mask: &Mask) -> [usize; 4] {
@@ -298,14 +323,21 @@ fn bounding_box(mask: &Mask) -> [usize; 4] {
 /// partial or zero (pull–push filling, Gortler et al. 1996: coarser levels take the
 /// coverage-weighted mean color of their children with the weight `min(1, Σ w)`, so a coarse
 /// pixel with one fully covered child is fully trusted; finer levels are then completed with
-/// `c = w·c + (1 − w)·coarse`). Only pixels inside `mask` matter.
-fn extended_tint(flat: &Plane<Rgba>, mask: &Mask) -> Plane<Rgb> {
+/// `c = w·c + (1 − w)·coarse`). Computed on `region` `[x0, y0, x1, y1)` (non-empty) only;
+/// only pixels inside `mask` matter.
+fn extended_tint(flat: &Plane<Rgba>, mask: &Mask, region: [usize; 4]) -> Plane<Rgb> {
+    let [rx, ry, rx1, ry1] = region;
     // Straight linear color and weight (the coverage).
-    let level0: Plane<[f32; 4]> = flat.map(|c| {
+    let level0: Plane<[f32; 4]> = Plane::from_fn(rx1 - rx, ry1 - ry, |x, y| {
+        let c = flat.get(rx + x, ry + y);
         let l = rgb_to_linear([c[0], c[1], c[2]]);
         [l[0], l[1], l[2], sanitize(c[3])]
     });
-    let needs_fill = level0.data().iter().zip(mask.data()).any(|(c, &m)| m && c[3] < 1.0);
+    let needs_fill = level0
+        .data()
+        .iter()
+        .enumerate()
+        .any(|(i, c)| c[3] < 1.0 && mask.get(rx + i % level0.width(), ry + i / level0.width()));
     if !needs_fill {
         return level0.map(|c| [c[0], c[1], c[2]]);
     }
@@ -381,7 +413,7 @@ mod tests {
             if x < 16 { [1.0, 0.0, 0.0, a] } else { [0.0, 1.0, 0.0, a] }
         });
         let mask = Plane::filled(32, 32, true);
-        let t = extended_tint(&flat, &mask);
+        let t = extended_tint(&flat, &mask, [0, 0, 32, 32]);
         assert_eq!(t.get(3, 10), [1.0, 0.0, 0.0]);
         // Margin rows take the color of the covered pixels below/above them.
         let m = t.get(3, 2);
