@@ -152,7 +152,7 @@ fn red_glaze_is_red_and_keeps_the_texture() {
     let (m_ex, s_ex) = mean_std(&lum(&exemplar));
     let (m_out, s_out) = mean_std(&lum(&out));
     println!("luminance exemplar mean {m_ex:.3} std {s_ex:.4}; glaze mean {m_out:.3} std {s_out:.4}");
-    assert!(s_out > 0.4 * s_ex, "texture lost: std {s_out} vs exemplar {s_ex}");
+    assert!(s_out > 0.8 * s_ex, "texture lost: std {s_out} vs exemplar {s_ex}");
 
     // The texture is the exemplar's: the recovered amount follows the true amount.
     let pairs: Vec<(f32, f32)> = (0..W * H)

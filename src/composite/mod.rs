@@ -57,7 +57,8 @@
 //! paper. On a transparent background a glaze becomes the least-opaque film that looks the same
 //! over white: alpha `1 − min_c T_c`, color `(T − m)/(1 − m)`.
 //!
-//! [`Recolor::Over`] composites like opaque paint: opacity `min(a, 1)`, color
+//! [`Recolor::Over`] composites like opaque paint: opacity `min(a / 0.5, 1)`
+//! ([`OVER_OPAQUE_AMOUNT`]: paint of half the typical density already hides what is below), color
 //! `F^max(a, 1) = exp(max(a, 1) · ln F)` (the flat color at the typical density, darker where
 //! paint accumulates), with ordinary "over". [`Recolor::None`] glazes with the exemplar's own
 //! transmittance `T = I / P`: over a background of the exemplar's paper color it reproduces the
@@ -77,6 +78,10 @@ use crate::error::{Error, Result};
 use crate::img::{Plane, Rgb, Rgba};
 use color::{fast_exp, fast_ln, rgb_to_linear};
 use rayon::prelude::*;
+
+/// With [`Recolor::Over`], paint of at least this amount (a fraction of the typical density)
+/// hides what is below it; thinner paint (light blooms, the fading edge) lets it show through.
+pub const OVER_OPAQUE_AMOUNT: f32 = 0.5;
 
 /// How a stylized layer is recolored (`--recolor`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum)]
@@ -349,7 +354,7 @@ fn draw_stylized(layer: &StylizedLayer, y: usize, acc: &mut [[f32; 4]], base: &[
                 glaze(a, t);
             }
             Recolor::Over => {
-                let o = p.amount.min(1.0);
+                let o = (p.amount * (1.0 / OVER_OPAQUE_AMOUNT)).min(1.0);
                 if o <= 0.0 {
                     continue;
                 }
