@@ -283,7 +283,8 @@ fn unfinished_or_failed_gifs_leave_nothing() {
     assert!(writer.add_frame(&wash(8, 8, 0.0)).unwrap_err().to_string().contains("8x8"));
     drop(writer);
     assert!(GifWriter::create(&path, 16, 16, GifOptions::new(0.0)).unwrap_err().to_string().contains("fps"));
-    assert!(GifWriter::create(&dir.join("missing/x.gif"), 16, 16, GifOptions::new(24.0)).is_err());
+    let err = GifWriter::create(&dir.join("missing/x.gif"), 16, 16, GifOptions::new(24.0)).unwrap_err().to_string();
+    assert!(err.contains("missing/x.gif"), "the error names the destination: {err}");
     assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -148,7 +148,7 @@ impl GifWriter {
         };
         let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "animation.gif".into());
         let tmp = dir.join(format!(".{}.{}.tmp", name, std::process::id()));
-        let file = File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
+        let file = File::create(&tmp).map_err(|e| Error::io(path, e))?;
         let mut writer = GifWriter {
             path: path.to_path_buf(),
             tmp,
@@ -219,8 +219,8 @@ impl GifWriter {
         // From here on `Drop` no longer cleans up: remove the temporary file on any error.
         let completed = (|| -> Result<()> {
             let buffered = encoder.into_inner().map_err(|e| self.encoding_error(e))?;
-            let file = buffered.into_inner().map_err(|e| Error::io(&self.tmp, e.into_error()))?;
-            file.sync_all().map_err(|e| Error::io(&self.tmp, e))?;
+            let file = buffered.into_inner().map_err(|e| Error::io(&self.path, e.into_error()))?;
+            file.sync_all().map_err(|e| Error::io(&self.path, e))?;
             drop(file);
             std::fs::rename(&self.tmp, &self.path).map_err(|e| Error::io(&self.path, e))
         })();
@@ -233,7 +233,7 @@ impl GifWriter {
 
     fn encoding_error(&self, e: gif::EncodingError) -> Error {
         match e {
-            gif::EncodingError::Io(io) => Error::io(&self.tmp, io),
+            gif::EncodingError::Io(io) => Error::io(&self.path, io),
             other => Error::image(&self.path, other),
         }
     }
