@@ -17,11 +17,13 @@
 #![warn(missing_docs)]
 
 pub mod anim;
+pub mod composite;
 pub mod error;
 pub mod eval;
 pub mod exemplar;
 pub mod guide;
 pub mod img;
+pub mod output;
 pub mod progress;
 pub mod seq;
 pub mod synth;

@@ -1,0 +1,89 @@
+//! Writing results: numbered PNG frames, stylized layers and animated GIFs.
+//!
+//! Every file is written to a temporary name in its destination directory and renamed into
+//! place when complete, so an interrupted or failed run never leaves a half-written file.
+//!
+//! # GIF quality
+//!
+//! GIF frames hold at most 256 colors, and watercolor washes are exactly the smooth gradients
+//! that band with naive palettes. [`GifWriter`] therefore
+//! - gives every frame its own palette, built from the pixels that frame changes: used as they
+//!   are when there are few enough; otherwise the most frequent colors (flat areas such as the
+//!   background, ≥ 1 % of the pixels, at most 16) are kept exactly — so flat areas are never
+//!   dithered — and the rest of the palette is learned by NeuQuant (`color_quant`) and refined
+//!   by three Lloyd (k-means) iterations;
+//! - maps pixels with serpentine Floyd–Steinberg error diffusion (exact nearest-color search on
+//!   a 16³ grid of candidate lists; error clamped to ±48 levels per channel so that colors the
+//!   palette cannot reach do not smear);
+//! - for opaque animations stores only the rectangle that changed since the previous frame,
+//!   pixels that did not change being transparent ("keep" disposal): still areas stay exactly
+//!   still instead of re-dithering every frame, and the palette is spent on what moves;
+//! - for transparent backgrounds writes whole frames cleared before the next ("background"
+//!   disposal); pixels with alpha < 0.5 are transparent, the others opaque (GIF has 1-bit
+//!   alpha);
+//! - times frames by rounding each frame's start time `100 k / fps` to 1/100 s, so delays
+//!   alternate (24 fps: 4, 4, 5, 4, 4, 4 …) and the total duration is exact ([`gif_schedule`]);
+//!   identical consecutive frames are merged into one longer frame, and above 50 fps frames
+//!   shorter than 2/100 s are dropped (browsers slow such frames down to 1/10 s);
+//! - loops forever.
+//!
+//! Deliberately not used: gifski / libimagequant, whose core is GPL-3.
+
+mod gif_writer;
+mod quant;
+
+pub use gif_writer::{GifOptions, GifSummary, GifWriter, MIN_DELAY_CS, gif_schedule};
+
+use crate::anim::Region;
+use crate::error::{Error, Result};
+use crate::img::{self, Plane, Rgba};
+use std::path::{Path, PathBuf};
+
+/// Digits of frame numbers in file names: 4, or more when `frame_count` needs them, so names
+/// always sort in frame order.
+pub fn frame_digits(frame_count: usize) -> usize {
+    frame_count.max(1).to_string().len().max(4)
+}
+
+/// `dir/NNNN.png` for the 0-based frame `frame0` of a sequence of `frame_count` frames: numbers
+/// start at 1 (`0001.png` is the first frame) and have [`frame_digits`] digits.
+pub fn frame_path(dir: &Path, frame0: usize, frame_count: usize) -> PathBuf {
+    dir.join(format!("{:0width$}.png", frame0 + 1, width = frame_digits(frame_count)))
+}
+
+/// Writes a frame as an 8-bit RGBA PNG at [`frame_path`], atomically; returns the path.
+pub fn write_frame(dir: &Path, frame0: usize, frame_count: usize, frame: &Plane<Rgba>) -> Result<PathBuf> {
+    let path = frame_path(dir, frame0, frame_count);
+    img::save_rgba(&path, frame)?;
+    Ok(path)
+}
+
+/// `out_dir/layers/NN_slug`, where `--keep-layers` writes a region's stylized frames.
+pub fn layer_dir(out_dir: &Path, region: &Region) -> PathBuf {
+    out_dir.join("layers").join(region.dir_name())
+}
+
+/// Creates `dir` (and its parents) if needed and checks that files can be created in it,
+/// so that an unwritable output directory fails before any work is done.
+pub fn prepare_dir(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let probe = dir.join(format!(".fluidymation-write-test.{}", std::process::id()));
+    std::fs::write(&probe, b"").map_err(|e| Error::io(dir, e))?;
+    std::fs::remove_file(&probe).map_err(|e| Error::io(dir, e))?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_paths_are_one_based_and_sortable() {
+        let d = Path::new("out");
+        assert_eq!(frame_path(d, 0, 24), Path::new("out/0001.png"));
+        assert_eq!(frame_path(d, 9998, 9999), Path::new("out/9999.png"));
+        assert_eq!(frame_path(d, 0, 10_000), Path::new("out/00001.png"));
+        assert_eq!(frame_path(d, 9999, 10_000), Path::new("out/10000.png"));
+        assert_eq!(frame_path(d, 0, 0), Path::new("out/0001.png"));
+    }
+}
