@@ -1,18 +1,40 @@
 //! Guidance channels (thesis §3.4–3.8, §4.1; paper Appendix A), computed by the same code for
 //! the exemplar sequence S and the target sequence T:
 //!
-//! * mask pre-processing: Gaussian blur (σ = `blur_sigma`) and a threshold below 0.5;
-//! * the signed distance field `I^dist` (positive inside);
-//! * the border channel `I^df = min(I^dist / b, 1)` ([`FrameGuides::df`]);
+//! * mask pre-processing: Gaussian blur (σ = `blur_sigma`) and a threshold below 0.5
+//!   ([`preprocess_mask`]);
+//! * the signed distance field `I^dist` (positive inside; [`sdf()`]);
+//! * the border channel `I^df = min(I^dist / b, 1)` ([`FrameGuides::df`]) and the
+//!   border/interior segmentation ([`FrameGuides::segments`]);
 //! * the flow field `I^flow` (boundary values from distance-field differences, diffused into
-//!   the interior by a multigrid Laplace solve, smoothed in time);
+//!   the interior by a multigrid Laplace solve, smoothed in time; [`flow`]);
 //! * motion extent `I^ext+` / `I^ext−` (norms of the 2D flow accumulated forward / backward in
-//!   time, reset outside the mask);
+//!   time, reset outside the mask; [`extent`]);
 //! * direction `I^dir = atan2(I^flow)` ([`FrameGuides::dir`]).
+//!
+//! Two entry points: [`compute_sequence`] holds a whole (short) sequence in memory, as for an
+//! exemplar; [`GuideStream`] yields the guides of a long target frame by frame in bounded
+//! memory. Both give bit-identical results.
 //!
 //! All lengths (distances, flow, extents) are in pixels of the sequence the guides were
 //! computed on; [`FrameGuides::downsample2`] keeps them in those full-resolution units.
 
+mod crop;
+pub mod extent;
+pub mod flo;
+pub mod flow;
+pub mod laplace;
+mod preprocess;
+pub mod preview;
+pub mod sdf;
+mod stream;
+
+pub use extent::{compute_sequence, compute_sequence_with_flow};
+pub use preprocess::preprocess_mask;
+pub use sdf::sdf;
+pub use stream::{GuideStream, GuideStreamBuilder};
+
+use crate::error::{Error, Result};
 use crate::img::{Mask, Plane};
 use glam::Vec2;
 
@@ -28,48 +50,178 @@ pub struct GuideParams {
     /// σ of the temporal Gaussian applied to distance fields before the flow is estimated
     /// (`--time-blur-sigma`), frames. Default: 2 (thesis).
     pub time_blur_sigma: f32,
-    /// Radius, in frames, of the temporal Gaussian applied to the flow sequence. Default: 3
-    /// (paper, Appendix A).
+    /// Radius, in frames, of the temporal Gaussian applied to the flow sequence (σ = radius / 3).
+    /// Default: 3 (paper, Appendix A).
     pub flow_time_radius: usize,
+    /// Completes the boundary flow with a tangential component from an affine motion fitted to
+    /// each connected part of the mask (see [`flow`]); `false` keeps the paper's purely normal
+    /// boundary flow. Default: true.
+    pub tangential_fit: bool,
+    /// Tolerance of the Laplace solve (scaled residual relative to the largest boundary flow, see
+    /// [`laplace`]). Default: [`laplace::TOLERANCE`] (10⁻⁴).
+    pub laplace_tolerance: f32,
 }
 
 impl Default for GuideParams {
     fn default() -> Self {
-        GuideParams { blur_sigma: 8.0, mask_threshold: 0.3, time_blur_sigma: 2.0, flow_time_radius: 3 }
-    }
-}
-
-/// The guidance channels of one frame.
-#[derive(Clone, Debug)]
-pub struct FrameGuides {
-    /// The pre-processed binary mask `I^mask`.
-    pub mask: Mask,
-    /// Signed distance to the mask boundary `I^dist`, positive inside, pixels.
-    pub dist: Plane<f32>,
-    /// Flow field `I^flow` between this frame and the next, pixels per frame.
-    pub flow: Plane<Vec2>,
-    /// Forward motion extent `I^ext+`, pixels.
-    pub ext_pos: Plane<f32>,
-    /// Backward motion extent `I^ext−`, pixels.
-    pub ext_neg: Plane<f32>,
-}
-
-// TEMPORARY stand-ins until the guide module lands (replaced at merge).
-impl FrameGuides {
-    /// Half-resolution guides (placeholder).
-    pub fn downsample2(&self) -> FrameGuides {
-        let mask = crate::img::downsample2(&self.mask.to_coverage()).threshold(0.5);
-        FrameGuides {
-            mask,
-            dist: crate::img::downsample2(&self.dist),
-            flow: crate::img::downsample2(&self.flow),
-            ext_pos: crate::img::downsample2(&self.ext_pos),
-            ext_neg: crate::img::downsample2(&self.ext_neg),
+        GuideParams {
+            blur_sigma: 8.0,
+            mask_threshold: 0.3,
+            time_blur_sigma: 2.0,
+            flow_time_radius: 3,
+            tangential_fit: true,
+            laplace_tolerance: laplace::TOLERANCE,
         }
     }
 }
 
-/// Placeholder.
-pub fn compute_sequence(_masks: &[Plane<f32>], _p: &GuideParams) -> crate::error::Result<Vec<FrameGuides>> {
-    Err(crate::error::Error::Cancelled)
+impl GuideParams {
+    /// Checks every value's range.
+    pub fn validate(&self) -> Result<()> {
+        let check = |name: &str, v: f32, lo: f32, hi: f32, lo_open: bool, allowed: &str| {
+            let ok = v.is_finite() && (if lo_open { v > lo } else { v >= lo }) && v <= hi;
+            if ok { Ok(()) } else { Err(Error::param(name, v, allowed)) }
+        };
+        check("blur-sigma", self.blur_sigma, 0.0, 100.0, false, "a number of pixels from 0 to 100")?;
+        check("mask-threshold", self.mask_threshold, 0.0, 1.0, true, "a number greater than 0 and at most 1")?;
+        check("time-blur-sigma", self.time_blur_sigma, 0.0, 20.0, false, "a number of frames from 0 to 20")?;
+        check("laplace-tolerance", self.laplace_tolerance, 0.0, 0.1, true, "a number greater than 0 and at most 0.1")?;
+        if self.flow_time_radius > 60 {
+            return Err(Error::param("flow-time-radius", self.flow_time_radius, "a number of frames from 0 to 60"));
+        }
+        Ok(())
+    }
+
+    /// A stable text key of every parameter, for caches of computed guides.
+    pub fn fingerprint(&self) -> String {
+        format!(
+            "guides-v1 blur={} thr={} tblur={} frad={} tan={} tol={}",
+            self.blur_sigma,
+            self.mask_threshold,
+            self.time_blur_sigma,
+            self.flow_time_radius,
+            self.tangential_fit,
+            self.laplace_tolerance
+        )
+    }
+}
+
+/// The guidance channels of one frame `i`, as planar images of the frame's size (or of a pyramid
+/// level, see [`FrameGuides::downsample2`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameGuides {
+    /// The pre-processed binary mask `I_i^mask`.
+    pub mask: Mask,
+    /// Signed distance to the mask boundary `I_i^dist`, positive inside, pixels (convention in
+    /// [`sdf`](mod@sdf): ±½ at the rim pixels; ± the image diagonal when the mask is empty or full).
+    pub dist: Plane<f32>,
+    /// Flow field `I_i^flow`: the motion from this frame to the next (`i → i+1`), pixels per
+    /// frame, inside the mask; zero outside. See [`flow`] for why this convention.
+    pub flow: Plane<Vec2>,
+    /// Forward motion extent `I_i^ext+ = ‖acc+(i)‖`, pixels: how far the material here has moved
+    /// since it appeared. Zero outside the mask.
+    pub ext_pos: Plane<f32>,
+    /// Backward motion extent `I_i^ext− = ‖acc−(i)‖`, pixels: how far it will still move until it
+    /// disappears or the sequence ends. Zero outside the mask.
+    pub ext_neg: Plane<f32>,
+}
+
+/// The segment of a pixel (thesis §3.4): patches only match within the same segment.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[repr(u8)]
+pub enum Segment {
+    /// Not in the mask.
+    #[default]
+    Outside,
+    /// In the mask, closer than the border width to its edge: `I^df < 1`.
+    Border,
+    /// In the mask, at least the border width from its edge: `I^df = 1`.
+    Interior,
+}
+
+impl FrameGuides {
+    /// `(width, height)`.
+    pub fn size(&self) -> (usize, usize) {
+        self.mask.size()
+    }
+
+    /// The border channel `I^df = min(I^dist / b, 1)` for border width `b` pixels (full-resolution
+    /// units at every pyramid level). Below 0 outside the mask, in `(0, 1)` in the border
+    /// segment, 1 in the interior. A `b` that is not positive is taken as the smallest positive
+    /// number (every mask pixel is interior).
+    pub fn df(&self, border_width: f32) -> Plane<f32> {
+        let b = border_width_or_min(border_width);
+        self.dist.map(|d| (d / b).min(1.0))
+    }
+
+    /// The border/interior segmentation for border width `b`: [`Segment::Border`] where the mask
+    /// has `I^df < 1`, [`Segment::Interior`] where `I^df = 1`, [`Segment::Outside`] elsewhere.
+    pub fn segments(&self, border_width: f32) -> Plane<Segment> {
+        let b = border_width_or_min(border_width);
+        let (w, h) = self.size();
+        Plane::from_fn(w, h, |x, y| match (self.mask.get(x, y), self.dist.get(x, y) / b >= 1.0) {
+            (false, _) => Segment::Outside,
+            (true, false) => Segment::Border,
+            (true, true) => Segment::Interior,
+        })
+    }
+
+    /// The direction channel `I^dir = atan2(flow.y, flow.x)`, radians in `(−π, π]`, measured from
+    /// the +x axis towards +y (image rows grow downwards, so positive angles turn clockwise on
+    /// screen). Zero flow gives 0: where `|flow|` is tiny the angle is noise, see DESIGN.md.
+    pub fn dir(&self) -> Plane<f32> {
+        self.flow.map(|f| f.y.atan2(f.x))
+    }
+
+    /// One step of the synthesis pyramid: half resolution, the size rounding up, pixel `(x, y)`
+    /// covering `(2x..2x+2, 2y..2y+2)` (edges clamped as in [`crate::img::downsample2`]). Values
+    /// stay in full-resolution units, so source and target guides remain comparable at every
+    /// level. The mask is "at least half of the four pixels in the mask"; `dist` is the plain
+    /// average; `flow`, `ext+` and `ext−` are averaged over the pixels that are in the mask (they
+    /// are zero outside it), and zero where none is.
+    pub fn downsample2(&self) -> FrameGuides {
+        let (w, h) = self.size();
+        let (w2, h2) = (w.div_ceil(2), h.div_ceil(2));
+        let mut mask = Plane::new(w2, h2);
+        let mut flow = Plane::new(w2, h2);
+        let mut ext_pos = Plane::new(w2, h2);
+        let mut ext_neg = Plane::new(w2, h2);
+        for y in 0..h2 {
+            for x in 0..w2 {
+                let (x0, y0) = (2 * x, 2 * y);
+                let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+                let (mut n, mut f, mut ep, mut en) = (0u32, Vec2::ZERO, 0f32, 0f32);
+                for (px, py) in [(x0, y0), (x1, y0), (x0, y1), (x1, y1)] {
+                    if self.mask.get(px, py) {
+                        n += 1;
+                        f += self.flow.get(px, py);
+                        ep += self.ext_pos.get(px, py);
+                        en += self.ext_neg.get(px, py);
+                    }
+                }
+                mask.set(x, y, n >= 2);
+                if n > 0 {
+                    let inv = 1.0 / n as f32;
+                    flow.set(x, y, f * inv);
+                    ext_pos.set(x, y, ep * inv);
+                    ext_neg.set(x, y, en * inv);
+                }
+            }
+        }
+        FrameGuides { mask, dist: crate::img::downsample2(&self.dist), flow, ext_pos, ext_neg }
+    }
+
+    /// `levels` pyramid levels, finest (this frame's resolution) first; `levels = 0` gives none.
+    pub fn pyramid(&self, levels: usize) -> Vec<FrameGuides> {
+        let mut out: Vec<FrameGuides> = Vec::with_capacity(levels);
+        for l in 0..levels {
+            let next = if l == 0 { self.clone() } else { out[l - 1].downsample2() };
+            out.push(next);
+        }
+        out
+    }
+}
+
+fn border_width_or_min(b: f32) -> f32 {
+    if b > 0.0 { b } else { f32::MIN_POSITIVE }
 }

@@ -1,0 +1,691 @@
+//! The flow field `I^flow` estimated from the masks (paper Appendix A, thesis §3.8, §4.1).
+//!
+//! **Frame convention.** `flow(i)` is the motion from frame `i` to frame `i+1`, defined on the
+//! mask of frame `i`. With it the paper's recurrences (§3.3) read exactly as written:
+//! `acc+(i) = acc+(i−1) + flow(i−1)` sums the motion `0 → i` that brought the material to frame
+//! `i`, and `acc−(i) = acc−(i+1) + flow(i)` sums the motion `i → last` still to come. (Appendix A
+//! writes the estimate at frame `i` from `dist_i − dist_{i−1}`, the motion `i−1 → i`; used in those
+//! recurrences it would lag one frame behind.) The last frame's flow uses the replicated last
+//! frame (see the temporal smoothing below), so it fades rather than stopping dead.
+//!
+//! **Construction, per frame `i` with a non-degenerate mask** (neither empty nor full):
+//!
+//! 1. Temporal smoothing of the distance fields (thesis §4.1): `D̃_i = Σ_k g_k · dist_{i+k}`, a
+//!    Gaussian of σ_t = `time_blur_sigma` frames (radius ⌈3σ_t⌉). Frames beyond the sequence, or
+//!    beyond a run of frames whose masks are non-degenerate, are replaced by the nearest frame of
+//!    the run (edges replicated): an empty or full mask has no meaningful distance field, so a
+//!    layer that appears or vanishes does not get a burst of fake motion.
+//! 2. Boundary pixels `B_i`: mask pixels with a 4-neighbour, inside the image, that is not in the
+//!    mask (the image edge is not a material boundary). At `b ∈ B_i` the outward normal is
+//!    `n = −∇D̃_i / |∇D̃_i|` (central differences, one-sided at the image edge) and the normal speed
+//!    `s = D̃_{i+1}(b) − D̃_i(b)`. The boundary flow is `s · n`. This is Appendix A's
+//!    `(dist_i − dist_{i−1}) ∇dist_i / |∇dist_i|` with one sign flipped: for a distance that is
+//!    *positive inside*, a growing mask has a rising distance and a gradient pointing inwards, so
+//!    the paper's expression as printed points inwards; `−∇` is the outward direction.
+//! 3. Tangential component (an addition, [`super::GuideParams::tangential_fit`]): the boundary
+//!    only reveals the normal part of the motion (the aperture problem), so a shape that
+//!    translates would get only half of its velocity in the middle (the harmonic extension of
+//!    `(n·u) n` on a circle is `u/2` at the centre). For each 4-connected part of the mask an
+//!    affine motion `v(p) = A p + c` is fitted to the normal speeds by least squares,
+//!    `min Σ_b (n_b · v(b) − s_b)²` (with a small ridge term that keeps unobservable modes, such
+//!    as the rotation of a disc, at zero), and the boundary value becomes
+//!    `s n + (v − (v·n) n)`: measured normal part, fitted tangential part. Pure growth keeps
+//!    `s n`; a translation gets its full velocity.
+//! 4. Interior values: Laplace's equation with the boundary values fixed, solved by multigrid
+//!    ([`super::laplace`]) inside the mask's bounding box, starting from the fitted affine field,
+//!    to the tolerance [`super::GuideParams::laplace_tolerance`].
+//! 5. Temporal smoothing of the flow sequence (Appendix A, radius `flow_time_radius`, σ =
+//!    radius/3), normalized over the frames whose mask covers the pixel:
+//!    `flow(i, p) = Σ_k g_k [p ∈ mask_{i+k}] F_{i+k}(p) / Σ_k g_k [p ∈ mask_{i+k}]`. Averaging in
+//!    the zeros of frames where the pixel was still paper would shrink the flow at every moving
+//!    front.
+//!
+//! Outside the mask the flow is zero. Everything is deterministic and independent of the number
+//! of threads and of the order frames are visited in (forward for [`super::compute_sequence`],
+//! backward in segments for [`super::GuideStream`]).
+
+use super::GuideParams;
+use super::crop::{Crop, FrameMask, Rect};
+use super::laplace::{self, Cell};
+use crate::error::{Error, Result};
+use crate::img::{Mask, Plane, gaussian_kernel};
+use glam::{DVec2, Vec2};
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+/// The final flow fields of a sequence of pre-processed masks (as [`super::preprocess_mask`]
+/// returns them), one per frame, following the construction in the module docs.
+pub fn estimate_sequence(masks: &[Mask], params: &GuideParams) -> Result<Vec<Plane<Vec2>>> {
+    params.validate()?;
+    let Some(first) = masks.first() else { return Ok(Vec::new()) };
+    let (w, h) = first.size();
+    let frames: Vec<Arc<FrameMask>> = masks
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            check_size(m.size(), (w, h), "mask", i)?;
+            Ok(Arc::new(FrameMask::from_full(m)))
+        })
+        .collect::<Result<_>>()?;
+    let mut provider = SliceProvider { masks: &frames };
+    let mut machine = FlowMachine::new(frames.len(), true, 0, frames.len() - 1, params);
+    let mut out = Vec::with_capacity(frames.len());
+    while let Some((_, _, f)) = machine.next_output(&mut provider)? {
+        out.push(f.to_full(w, h));
+    }
+    Ok(out)
+}
+
+pub(crate) fn check_size(found: (usize, usize), expected: (usize, usize), what: &str, frame: usize) -> Result<()> {
+    if found == expected {
+        Ok(())
+    } else {
+        Err(Error::param(
+            what,
+            format!("{}x{} at frame {}", found.0, found.1, frame),
+            format!("every frame of the sequence to be {}x{}", expected.0, expected.1),
+        ))
+    }
+}
+
+/// Hands frame masks to the [`FlowMachine`].
+pub(crate) trait MaskProvider {
+    fn mask(&mut self, i: usize) -> Result<Arc<FrameMask>>;
+}
+
+/// All masks in memory.
+pub(crate) struct SliceProvider<'a> {
+    pub masks: &'a [Arc<FrameMask>],
+}
+
+impl MaskProvider for SliceProvider<'_> {
+    fn mask(&mut self, i: usize) -> Result<Arc<FrameMask>> {
+        Ok(self.masks[i].clone())
+    }
+}
+
+/// Kernels and switches derived from [`GuideParams`].
+#[derive(Clone, Debug)]
+pub(crate) struct FlowConfig {
+    /// Temporal kernel of the distance fields, `2·rt + 1` taps.
+    kt: Vec<f32>,
+    rt: usize,
+    /// Temporal kernel of the flow, `2·rf + 1` taps.
+    kf: Vec<f32>,
+    rf: usize,
+    tangential: bool,
+    tolerance: f32,
+}
+
+impl FlowConfig {
+    pub fn new(p: &GuideParams) -> Self {
+        let kt = gaussian_kernel(p.time_blur_sigma);
+        let rt = kt.len() / 2;
+        let rf = p.flow_time_radius;
+        let sigma = rf as f32 / 3.0;
+        let mut kf: Vec<f32> = (0..=2 * rf)
+            .map(|i| {
+                let k = i as f32 - rf as f32;
+                if rf == 0 { 1.0 } else { (-(k * k) / (2.0 * sigma * sigma)).exp() }
+            })
+            .collect();
+        let s: f32 = kf.iter().sum();
+        kf.iter_mut().for_each(|v| *v /= s);
+        FlowConfig { kt, rt, kf, rf, tangential: p.tangential_fit, tolerance: p.laplace_tolerance }
+    }
+}
+
+/// The pending estimate of the raw flow `F_j` of one frame: samples of the distance fields of
+/// its temporal window at the boundary pixels and their neighbours.
+struct Task {
+    mask: Arc<FrameMask>,
+    /// `B_j` and its 4-neighbours, linear image indices, sorted.
+    stencil: Vec<u32>,
+    srect: Rect,
+    /// Per boundary pixel: stencil index of itself and of its left, right, upper, lower neighbour
+    /// (`u32::MAX` off the image).
+    nbr: Vec<[u32; 5]>,
+    /// The distinct frames of the window, ascending, and their samples once known.
+    frames: Vec<usize>,
+    rows: Vec<Option<Vec<f32>>>,
+    /// `D̃_j = Σ g · rows[slot]` and `D̃_{j+1}`, as (slot, weight) in kernel order.
+    w0: Vec<(usize, f32)>,
+    w1: Vec<(usize, f32)>,
+}
+
+const NO: u32 = u32::MAX;
+
+impl Task {
+    fn complete(&self) -> bool {
+        self.rows.iter().all(Option::is_some)
+    }
+
+    fn slot_of(&self, m: usize) -> Option<usize> {
+        self.frames.binary_search(&m).ok().filter(|&s| self.rows[s].is_none())
+    }
+
+    /// Stores the samples of distance field `d` (a crop holding the stencil) of frame `m`.
+    fn fill(&mut self, m: usize, d: &Crop<f32>) {
+        if let Some(s) = self.slot_of(m) {
+            let w = self.mask.w;
+            self.rows[s] = Some(self.stencil.iter().map(|&i| d.get(i as usize % w, i as usize / w)).collect());
+        }
+    }
+
+    fn smoothed(&self, weights: &[(usize, f32)], idx: usize) -> f32 {
+        let mut acc = 0f32;
+        for &(s, g) in weights {
+            acc += g * self.rows[s].as_ref().map_or(0.0, |r| r[idx]);
+        }
+        acc
+    }
+
+    /// The raw flow `F_j` over the mask's bounding box (steps 2–4 of the module docs).
+    fn solve(&self, cfg: &FlowConfig) -> Crop<Vec2> {
+        let mask = &self.mask;
+        let w = mask.w;
+        // Step 2: normal speed and outward normal at each boundary pixel.
+        let normals: Vec<(f32, Vec2)> = self
+            .nbr
+            .iter()
+            .map(|nb| {
+                let d = |k: usize| (nb[k] != NO).then(|| self.smoothed(&self.w0, nb[k] as usize));
+                let here = self.smoothed(&self.w0, nb[0] as usize);
+                let diff = |lo: Option<f32>, hi: Option<f32>| match (lo, hi) {
+                    (Some(a), Some(b)) => 0.5 * (b - a),
+                    (None, Some(b)) => b - here,
+                    (Some(a), None) => here - a,
+                    (None, None) => 0.0,
+                };
+                let grad = Vec2::new(diff(d(1), d(2)), diff(d(3), d(4)));
+                let len = grad.length();
+                let n = if len > 1e-6 { -grad / len } else { Vec2::ZERO };
+                let s = self.smoothed(&self.w1, nb[0] as usize) - here;
+                (s, n)
+            })
+            .collect();
+        // Components of the mask (4-connected) inside its bounding box.
+        let rect = mask.rect();
+        let (labels, ncomp) = label_components(mask);
+        let label_of = |x: usize, y: usize| labels[(y - rect.y0) * rect.width() + (x - rect.x0)];
+        // Step 3: an affine motion per component.
+        let fits: Vec<Affine> = if cfg.tangential {
+            let mut members: Vec<Vec<usize>> = vec![Vec::new(); ncomp];
+            for (bi, &b) in mask.boundary.iter().enumerate() {
+                let (x, y) = (b as usize % w, b as usize / w);
+                members[label_of(x, y) as usize].push(bi);
+            }
+            members
+                .iter()
+                .map(|m| {
+                    let pts: Vec<(DVec2, DVec2, f64)> = m
+                        .iter()
+                        .map(|&bi| {
+                            let b = mask.boundary[bi] as usize;
+                            let (s, n) = normals[bi];
+                            (DVec2::new((b % w) as f64, (b / w) as f64), n.as_dvec2(), s as f64)
+                        })
+                        .collect();
+                    Affine::fit(&pts)
+                })
+                .collect()
+        } else {
+            vec![Affine::ZERO; ncomp]
+        };
+        // Step 4: Laplace with the boundary values fixed.
+        let (rw, rh) = (rect.width(), rect.height());
+        let mut cells =
+            Plane::from_fn(
+                rw,
+                rh,
+                |x, y| if mask.contains(x + rect.x0, y + rect.y0) { Cell::Free } else { Cell::Outside },
+            );
+        let mut values = Plane::from_fn(rw, rh, |x, y| {
+            let (gx, gy) = (x + rect.x0, y + rect.y0);
+            if mask.contains(gx, gy) { fits[label_of(gx, gy) as usize].at(gx, gy) } else { Vec2::ZERO }
+        });
+        for (bi, &b) in mask.boundary.iter().enumerate() {
+            let (x, y) = (b as usize % w, b as usize / w);
+            let (s, n) = normals[bi];
+            let v = fits[label_of(x, y) as usize].at(x, y);
+            let g = s * n + (v - v.dot(n) * n);
+            cells.set(x - rect.x0, y - rect.y0, Cell::Fixed);
+            values.set(x - rect.x0, y - rect.y0, g);
+        }
+        let report = laplace::solve(&cells, &mut values, cfg.tolerance);
+        if !report.converged {
+            log::warn!(
+                "flow: the Laplace solve stopped after {} V-cycles at residual {} (tolerance {})",
+                report.cycles,
+                report.residual,
+                report.threshold
+            );
+        }
+        Crop { rect, plane: values }
+    }
+}
+
+/// 4-connected components of a frame mask over its bounding box; returns the labels (row-major
+/// over the box, `u32::MAX` outside the mask) and their number.
+fn label_components(mask: &FrameMask) -> (Vec<u32>, usize) {
+    let r = mask.rect();
+    let (rw, rh) = (r.width(), r.height());
+    let inside = |i: usize| mask.crop.plane.data()[i];
+    let mut labels = vec![u32::MAX; rw * rh];
+    let mut n = 0u32;
+    let mut stack = Vec::new();
+    for start in 0..rw * rh {
+        if !inside(start) || labels[start] != u32::MAX {
+            continue;
+        }
+        labels[start] = n;
+        stack.push(start);
+        while let Some(i) = stack.pop() {
+            let (x, y) = (i % rw, i / rw);
+            let mut visit = |j: usize| {
+                if inside(j) && labels[j] == u32::MAX {
+                    labels[j] = n;
+                    stack.push(j);
+                }
+            };
+            if x > 0 {
+                visit(i - 1);
+            }
+            if x + 1 < rw {
+                visit(i + 1);
+            }
+            if y > 0 {
+                visit(i - rw);
+            }
+            if y + 1 < rh {
+                visit(i + rw);
+            }
+        }
+        n += 1;
+    }
+    (labels, n as usize)
+}
+
+/// An affine motion `v(p) = A (p − c)/ρ + t`, fitted in centred, scaled coordinates.
+#[derive(Clone, Copy, Debug)]
+struct Affine {
+    c: DVec2,
+    inv_rho: f64,
+    /// `[a11, a12, a21, a22, t1, t2]`.
+    theta: [f64; 6],
+}
+
+impl Affine {
+    const ZERO: Affine = Affine { c: DVec2::ZERO, inv_rho: 0.0, theta: [0.0; 6] };
+
+    /// Relative weight of the ridge term: modes whose information is below ~1 % of the average
+    /// are pulled towards zero.
+    const RIDGE: f64 = 0.01;
+
+    /// Least squares `min Σ (n·v(p) − s)² + λ|θ|²` over `(p, n, s)`.
+    fn fit(pts: &[(DVec2, DVec2, f64)]) -> Affine {
+        if pts.len() < 3 {
+            return Affine::ZERO;
+        }
+        let c = pts.iter().map(|p| p.0).sum::<DVec2>() / pts.len() as f64;
+        let rho = (pts.iter().map(|p| (p.0 - c).length_squared()).sum::<f64>() / pts.len() as f64).sqrt().max(1.0);
+        let inv_rho = 1.0 / rho;
+        let mut m = [[0f64; 6]; 6];
+        let mut rhs = [0f64; 6];
+        for &(p, n, s) in pts {
+            let q = (p - c) * inv_rho;
+            let j = [n.x * q.x, n.x * q.y, n.y * q.x, n.y * q.y, n.x, n.y];
+            for a in 0..6 {
+                rhs[a] += j[a] * s;
+                for b in 0..6 {
+                    m[a][b] += j[a] * j[b];
+                }
+            }
+        }
+        let trace: f64 = (0..6).map(|a| m[a][a]).sum();
+        let lambda = Self::RIDGE * trace / 6.0 + 1e-12;
+        for (a, row) in m.iter_mut().enumerate() {
+            row[a] += lambda;
+        }
+        match solve6(m, rhs) {
+            Some(theta) => Affine { c, inv_rho, theta },
+            None => Affine::ZERO,
+        }
+    }
+
+    #[inline]
+    fn at(&self, x: usize, y: usize) -> Vec2 {
+        let q = (DVec2::new(x as f64, y as f64) - self.c) * self.inv_rho;
+        let t = &self.theta;
+        Vec2::new((t[0] * q.x + t[1] * q.y + t[4]) as f32, (t[2] * q.x + t[3] * q.y + t[5]) as f32)
+    }
+}
+
+/// Solves a symmetric positive definite 6×6 system by Cholesky; `None` if it is not.
+fn solve6(m: [[f64; 6]; 6], b: [f64; 6]) -> Option<[f64; 6]> {
+    let mut l = [[0f64; 6]; 6];
+    for i in 0..6 {
+        for j in 0..=i {
+            let s: f64 = m[i][j] - (0..j).map(|k| l[i][k] * l[j][k]).sum::<f64>();
+            if i == j {
+                if s <= 0.0 || !s.is_finite() {
+                    return None;
+                }
+                l[i][i] = s.sqrt();
+            } else {
+                l[i][j] = s / l[j][j];
+            }
+        }
+    }
+    let mut y = [0f64; 6];
+    for i in 0..6 {
+        y[i] = (b[i] - (0..i).map(|k| l[i][k] * y[k]).sum::<f64>()) / l[i][i];
+    }
+    let mut x = [0f64; 6];
+    for i in (0..6).rev() {
+        x[i] = (y[i] - (i + 1..6).map(|k| l[k][i] * x[k]).sum::<f64>()) / l[i][i];
+    }
+    Some(x)
+}
+
+/// Step 5: the normalized temporal Gaussian of the raw flows around frame `i`.
+fn smooth_in_time(
+    i: usize,
+    cfg: &FlowConfig,
+    mask: &FrameMask,
+    flows: &BTreeMap<usize, (Arc<FrameMask>, Arc<Crop<Vec2>>)>,
+) -> Crop<Vec2> {
+    let rect = mask.rect();
+    let rf = cfg.rf as isize;
+    let neighbours: Vec<(f32, &FrameMask, &Crop<Vec2>)> = (-rf..=rf)
+        .filter_map(|k| {
+            let j = i as isize + k;
+            let g = cfg.kf[(k + rf) as usize];
+            (j >= 0).then(|| flows.get(&(j as usize))).flatten().map(|(m, f)| (g, &**m, &**f))
+        })
+        .collect();
+    let mut out = Crop::new(rect);
+    out.plane.data_mut().par_chunks_mut(rect.width().max(1)).enumerate().for_each(|(yy, row)| {
+        let y = rect.y0 + yy;
+        for (xx, o) in row.iter_mut().enumerate() {
+            let x = rect.x0 + xx;
+            if !mask.contains(x, y) {
+                continue;
+            }
+            let (mut num, mut den) = (Vec2::ZERO, 0f32);
+            for &(g, m, f) in &neighbours {
+                if m.contains(x, y) {
+                    num += f.get(x, y) * g;
+                    den += g;
+                }
+            }
+            *o = if den > 0.0 { num / den } else { Vec2::ZERO };
+        }
+    });
+    out
+}
+
+/// Produces the final flows of a range of frames, visited forward or backward, keeping only a
+/// sliding window of masks, distance samples and raw flows in memory. The flow of a frame does
+/// not depend on where the machine started or which way it runs.
+pub(crate) struct FlowMachine {
+    n: usize,
+    forward: bool,
+    cfg: FlowConfig,
+    /// Next frame to output, and the last one.
+    next: Option<usize>,
+    last: usize,
+    /// Frames whose raw flow may be needed.
+    f_lo: usize,
+    f_hi: usize,
+    /// Frames whose distance field may be needed.
+    d_lo: usize,
+    d_hi: usize,
+    /// Next distance field to compute.
+    frontier: Option<usize>,
+    masks: BTreeMap<usize, Arc<FrameMask>>,
+    tasks: BTreeMap<usize, Task>,
+    flows: BTreeMap<usize, (Arc<FrameMask>, Arc<Crop<Vec2>>)>,
+}
+
+impl FlowMachine {
+    /// Outputs frames `first, first ± 1, …, last` (forward: `first ≤ last`) of an `n`-frame sequence.
+    pub fn new(n: usize, forward: bool, first: usize, last: usize, params: &GuideParams) -> Self {
+        let cfg = FlowConfig::new(params);
+        let (lo, hi) = (first.min(last), first.max(last));
+        let f_lo = lo.saturating_sub(cfg.rf);
+        let f_hi = (hi + cfg.rf).min(n.saturating_sub(1));
+        let d_lo = f_lo.saturating_sub(cfg.rt);
+        let d_hi = (f_hi + cfg.rt + 1).min(n.saturating_sub(1));
+        FlowMachine {
+            n,
+            forward,
+            next: (n > 0).then_some(first),
+            last,
+            f_lo,
+            f_hi,
+            d_lo,
+            d_hi,
+            frontier: Some(if forward { d_lo } else { d_hi }),
+            cfg,
+            masks: BTreeMap::new(),
+            tasks: BTreeMap::new(),
+            flows: BTreeMap::new(),
+        }
+    }
+
+    /// Number of frames `a` lies after `b` in the direction of travel (negative: before).
+    fn ahead(&self, a: usize, b: usize) -> isize {
+        if self.forward { a as isize - b as isize } else { b as isize - a as isize }
+    }
+
+    fn mask(&mut self, i: usize, p: &mut dyn MaskProvider) -> Result<Arc<FrameMask>> {
+        if let Some(m) = self.masks.get(&i) {
+            return Ok(m.clone());
+        }
+        let m = p.mask(i)?;
+        self.masks.insert(i, m.clone());
+        Ok(m)
+    }
+
+    /// The next frame's index, mask and final flow (over the mask's bounding box).
+    pub fn next_output(&mut self, p: &mut dyn MaskProvider) -> Result<Option<(usize, Arc<FrameMask>, Crop<Vec2>)>> {
+        let Some(i) = self.next else { return Ok(None) };
+        let rf = self.cfg.rf;
+        let (lo, hi) = (i.saturating_sub(rf), (i + rf).min(self.n - 1));
+        let order: Vec<usize> = if self.forward { (lo..=hi).collect() } else { (lo..=hi).rev().collect() };
+        for j in order {
+            self.ensure_flow(j, p)?;
+        }
+        let mask = self.flows[&i].0.clone();
+        let out = smooth_in_time(i, &self.cfg, &mask, &self.flows);
+        // Forget what no later output needs.
+        let keep_from = i;
+        let rf = rf as isize;
+        let stale: Vec<usize> = self.flows.keys().copied().filter(|&j| self.ahead(j, keep_from) < 1 - rf).collect();
+        for j in stale {
+            self.flows.remove(&j);
+        }
+        let horizon = match self.frontier {
+            Some(f) if self.ahead(f, i) < 0 => f,
+            _ => i,
+        };
+        let margin = (2 * self.cfg.rt + 2) as isize + rf;
+        let stale: Vec<usize> = self.masks.keys().copied().filter(|&k| self.ahead(k, horizon) < -margin).collect();
+        for k in stale {
+            self.masks.remove(&k);
+        }
+        self.next = if i == self.last {
+            None
+        } else if self.forward {
+            Some(i + 1)
+        } else {
+            Some(i - 1)
+        };
+        Ok(Some((i, mask, out)))
+    }
+
+    fn ensure_flow(&mut self, j: usize, p: &mut dyn MaskProvider) -> Result<()> {
+        if self.flows.contains_key(&j) {
+            return Ok(());
+        }
+        let mask = self.mask(j, p)?;
+        if mask.is_degenerate() {
+            let zero = Crop::new(mask.rect());
+            self.flows.insert(j, (mask, Arc::new(zero)));
+            return Ok(());
+        }
+        if !self.tasks.contains_key(&j) {
+            self.create_task(j, p)?;
+        }
+        while !self.tasks[&j].complete() {
+            if self.frontier.is_none() {
+                // Cannot happen: every task's window lies inside [d_lo, d_hi].
+                return Err(Error::param("flow window", j, "a frame whose temporal window was visited"));
+            }
+            self.advance(p)?;
+        }
+        if let Some(task) = self.tasks.remove(&j) {
+            let f = task.solve(&self.cfg);
+            self.flows.insert(j, (task.mask, Arc::new(f)));
+        }
+        Ok(())
+    }
+
+    fn create_task(&mut self, j: usize, p: &mut dyn MaskProvider) -> Result<()> {
+        let rt = self.cfg.rt;
+        let mask = self.mask(j, p)?;
+        // The run of non-degenerate masks around j, within the window.
+        let mut lo = j;
+        while lo > j.saturating_sub(rt) && !self.mask(lo - 1, p)?.is_degenerate() {
+            lo -= 1;
+        }
+        let mut hi = j;
+        while hi < (j + rt + 1).min(self.n - 1) && !self.mask(hi + 1, p)?.is_degenerate() {
+            hi += 1;
+        }
+        let clamp = |k: isize| (j as isize + k).clamp(lo as isize, hi as isize) as usize;
+        let mut frames: Vec<usize> = (-(rt as isize)..=rt as isize + 1).map(clamp).collect();
+        frames.sort_unstable();
+        frames.dedup();
+        let slot = |f: usize| frames.binary_search(&f).unwrap_or(0);
+        let rti = rt as isize;
+        let w0 = (-rti..=rti).map(|k| (slot(clamp(k)), self.cfg.kt[(k + rti) as usize])).collect();
+        let w1 = (-rti..=rti).map(|k| (slot(clamp(k + 1)), self.cfg.kt[(k + rti) as usize])).collect();
+        // The stencil: boundary pixels and their neighbours.
+        let (w, h) = (mask.w, mask.h);
+        let mut stencil = Vec::with_capacity(mask.boundary.len() * 3);
+        for &b in &mask.boundary {
+            let (x, y) = (b as usize % w, b as usize / w);
+            stencil.push(b);
+            if x > 0 {
+                stencil.push(b - 1);
+            }
+            if x + 1 < w {
+                stencil.push(b + 1);
+            }
+            if y > 0 {
+                stencil.push(b - w as u32);
+            }
+            if y + 1 < h {
+                stencil.push(b + w as u32);
+            }
+        }
+        stencil.sort_unstable();
+        stencil.dedup();
+        let find = |i: u32| stencil.binary_search(&i).map_or(NO, |k| k as u32);
+        let nbr = mask
+            .boundary
+            .iter()
+            .map(|&b| {
+                let (x, y) = (b as usize % w, b as usize / w);
+                [
+                    find(b),
+                    if x > 0 { find(b - 1) } else { NO },
+                    if x + 1 < w { find(b + 1) } else { NO },
+                    if y > 0 { find(b - w as u32) } else { NO },
+                    if y + 1 < h { find(b + w as u32) } else { NO },
+                ]
+            })
+            .collect();
+        let srect = mask.rect().expand(1, w, h);
+        let rows = vec![None; frames.len()];
+        self.tasks.insert(j, Task { mask, stencil, srect, nbr, frames, rows, w0, w1 });
+        Ok(())
+    }
+
+    /// Computes the distance field of the frontier frame for every task that needs it.
+    fn advance(&mut self, p: &mut dyn MaskProvider) -> Result<()> {
+        let Some(m) = self.frontier else { return Ok(()) };
+        let rt = self.cfg.rt;
+        // Create every task whose (unclamped) window starts here or has started.
+        for j in m.saturating_sub(rt + 1)..=(m + rt).min(self.n - 1) {
+            if j < self.f_lo || j > self.f_hi || self.flows.contains_key(&j) || self.tasks.contains_key(&j) {
+                continue;
+            }
+            if !self.mask(j, p)?.is_degenerate() {
+                self.create_task(j, p)?;
+            }
+        }
+        let needing: Vec<usize> = self.tasks.iter().filter(|(_, t)| t.slot_of(m).is_some()).map(|(&j, _)| j).collect();
+        if !needing.is_empty() {
+            let mask = self.mask(m, p)?;
+            let mut rect = mask.rect().expand(1, mask.w, mask.h);
+            for j in &needing {
+                rect = rect.union(self.tasks[j].srect);
+            }
+            let d = Crop { rect, plane: super::sdf::sdf(&mask.crop_to(rect)) };
+            for j in needing {
+                if let Some(t) = self.tasks.get_mut(&j) {
+                    t.fill(m, &d);
+                }
+            }
+        }
+        let (lo, hi) = (self.d_lo, self.d_hi);
+        self.frontier = if self.forward { (m < hi).then_some(m + 1) } else { (m > lo).then(|| m - 1) };
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn affine_fit_recovers_translation_and_growth() {
+        // Points on a circle with exact normal speeds of a known motion.
+        let pts = |v: &dyn Fn(DVec2) -> DVec2| -> Vec<(DVec2, DVec2, f64)> {
+            (0..200)
+                .map(|k| {
+                    let a = k as f64 * std::f64::consts::TAU / 200.0;
+                    let n = DVec2::new(a.cos(), a.sin());
+                    let p = DVec2::new(50.0, 40.0) + 20.0 * n;
+                    (p, n, n.dot(v(p)))
+                })
+                .collect()
+        };
+        let t = Affine::fit(&pts(&|_| DVec2::new(1.5, -0.5)));
+        let v = t.at(50, 40);
+        assert!((v - Vec2::new(1.5, -0.5)).length() < 0.03, "{v:?}");
+        let g = Affine::fit(&pts(&|p| (p - DVec2::new(50.0, 40.0)) * 0.1));
+        let v = g.at(70, 40);
+        assert!((v - Vec2::new(2.0, 0.0)).length() < 0.05, "{v:?}");
+        // A rotation of a disc is invisible at its boundary: the fit stays at zero.
+        let r = Affine::fit(&pts(&|p| {
+            let q = p - DVec2::new(50.0, 40.0);
+            DVec2::new(-q.y, q.x) * 0.1
+        }));
+        assert!(r.at(70, 40).length() < 1e-6);
+        assert!(Affine::fit(&[]).at(3, 3) == Vec2::ZERO);
+    }
+
+    #[test]
+    fn components_are_labelled_separately() {
+        let m = Plane::from_fn(10, 5, |x, y| (x < 3 || x > 6) && y > 0);
+        let fm = FrameMask::from_full(&m);
+        let (labels, n) = label_components(&fm);
+        assert_eq!(n, 2);
+        assert_ne!(labels[0], labels[9]);
+    }
+}
