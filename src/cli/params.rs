@@ -22,10 +22,10 @@ pub struct SynthFlags {
     /// Weight of the border channel w_df (w^bound) [default: 5].
     #[arg(long, value_name = "W")]
     pub dist_weight: Option<f32>,
-    /// Weight of the motion-extent channels w_ext [default: 0.1].
+    /// Weight of the motion-extent channels w_ext [default: 0.03].
     #[arg(long, value_name = "W")]
     pub flow_weight: Option<f32>,
-    /// Weight of the temporal guide w_prev (w^temp) [default: 1].
+    /// Weight of the temporal guide w_prev (w^temp) [default: 4].
     #[arg(long, value_name = "W")]
     pub prev_weight: Option<f32>,
     /// Uniformity weight λ [default: 2].
@@ -61,6 +61,9 @@ pub struct SynthFlags {
     /// Temporal modulation bounds "m_u,m_l" in pixels, as in the thesis [default: 10,2].
     #[arg(long, value_name = "MU,ML")]
     pub prev_modulation_bounds: Option<String>,
+    /// σ of the center weighting in voting, pixels; 0 = uniform [default: 1].
+    #[arg(long, value_name = "PX")]
+    pub vote_sigma: Option<f32>,
     /// Also optimize the finest pyramid level (slower; the thesis only votes it).
     #[arg(long)]
     pub optimize_finest: bool,
@@ -78,6 +81,9 @@ impl SynthFlags {
         }
         if let Some(v) = self.prev_weight {
             b = b.w_prev(v);
+        }
+        if let Some(v) = self.vote_sigma {
+            b = b.vote_sigma(v);
         }
         if let Some(v) = self.lambda {
             b = b.lambda(v);

@@ -54,7 +54,7 @@ impl Synthesizer {
     pub fn fingerprint(&self) -> String {
         let src = &self.source.pyramid;
         format!(
-            "{:?}|{}x{}x{}|b={}|paper={:?}",
+            "{:?}|{}x{}x{}|b={}|v={}|paper={:?}",
             self.params, src.size.0, src.size.1, src.levels[0].frames, src.border_width, src.paper
         )
     }

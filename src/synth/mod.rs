@@ -291,7 +291,7 @@ impl Synthesizer {
             let prev_down = if has_prev {
                 let shifted = shifted0.as_ref().map(|s| s.downscale(l, lw, lh));
                 if let (Some(sd), Some(prev)) = (&shifted, &self.prev) {
-                    let voted = vote::vote(sl, sd, paper);
+                    let voted = vote::vote(sl, sd, paper, p.vote_sigma);
                     write_lanes(&mut tgt, &voted, false);
                     shift::fill_modulation(&mut tgt, sl, sd, &prev.masks[l], b, p.prev_bounds, p.w_prev);
                 }
@@ -346,7 +346,7 @@ impl Synthesizer {
                         }
                         // MERGENNF: per pixel, the field with the smaller error (against the
                         // estimate voted from the up-scaled field).
-                        let voted = vote::vote(sl, &up, paper);
+                        let voted = vote::vote(sl, &up, paper, p.vote_sigma);
                         write_lanes(&mut tgt, &voted, true);
                         let omega = if finest_vote_only {
                             no_omega.clone()
@@ -369,7 +369,7 @@ impl Synthesizer {
                 }
             };
             if !finest_vote_only {
-                let voted = vote::vote(sl, &field, paper);
+                let voted = vote::vote(sl, &field, paper, p.vote_sigma);
                 write_lanes(&mut tgt, &voted, true);
                 for opt in 0..p.opt_iters_at(from_coarsest) {
                     for it in 0..p.pm_iters_at(from_coarsest) {
@@ -389,7 +389,7 @@ impl Synthesizer {
                         evaluations += patchmatch::sweep(&ctx, &mut field, it).evaluations;
                     }
                     energy.push((l, mean_err(&field)));
-                    let voted = vote::vote(sl, &field, paper);
+                    let voted = vote::vote(sl, &field, paper, p.vote_sigma);
                     write_lanes(&mut tgt, &voted, true);
                 }
             }
@@ -401,7 +401,7 @@ impl Synthesizer {
                 }));
             }
             if l == 0 {
-                final_rgb = vote::vote(sl, &field, paper);
+                final_rgb = vote::vote(sl, &field, paper, p.vote_sigma);
             }
             nnf = Some(field);
             level_times.push(t0.elapsed());

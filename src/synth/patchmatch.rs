@@ -56,16 +56,29 @@ impl Ctx<'_> {
         if self.src.valid[seg].is_empty() { None } else { Some(seg) }
     }
 
-    /// The rotation for target pixel q and a source pixel with direction `s_dir`:
-    /// M aligning the flows, or its +π alternative when `flip`.
+    /// The rotations to try for target pixel q and a source pixel with flow direction `s_dir`
+    /// (paper §4, thesis §4.3): M aligning the flows (θ_T − θ_S) and its +π alternative, which
+    /// compares ext± swapped. Where either flow is too small to have a direction, only θ = 0.
+    /// Returns the options and how many are valid.
     #[inline]
-    pub fn rotation(&self, q: usize, s_dir: Vec2, flip: bool) -> (f32, f32, bool) {
-        if !self.direction_rule {
-            // θ = 0; the ext swap still follows the flows' relative direction.
-            return (1.0, 0.0, self.tgt.info[q].dir.dot(s_dir) < 0.0);
+    pub fn rotations(&self, q: usize, s_dir: Vec2) -> ([(f32, f32, bool); 2], usize) {
+        let t_dir = self.tgt.info[q].dir;
+        if t_dir == Vec2::ZERO || s_dir == Vec2::ZERO {
+            return ([(1.0, 0.0, false); 2], 1);
         }
-        let (c, s) = aligning_rotation(self.tgt.info[q].dir, s_dir);
-        if flip { (-c, -s, true) } else { (c, s, false) }
+        if !self.direction_rule {
+            // Ablation: θ = 0; the ext swap still follows the flows' relative direction.
+            return ([(1.0, 0.0, t_dir.dot(s_dir) < 0.0); 2], 1);
+        }
+        let (c, s) = aligning_rotation(t_dir, s_dir);
+        ([(c, s, false), (-c, -s, true)], 2)
+    }
+
+    /// The rotation option of the same kind (aligned or flipped) as `flip`.
+    #[inline]
+    pub fn rotation_like(&self, q: usize, s_dir: Vec2, flip: bool) -> (f32, f32, bool) {
+        let (opts, n) = self.rotations(q, s_dir);
+        if n == 2 && flip { opts[1] } else { opts[0] }
     }
 
     /// Validates a candidate center: the nearest pixel is a valid center of the right segment.
@@ -112,12 +125,14 @@ impl Ctx<'_> {
         }
         let idx = list[rng.below(list.len())] as usize;
         let (i, x, y) = self.src.coords(idx);
-        let (c, s, flip) = self.rotation(q, self.src.info[idx].dir, false);
+        let (c, s, flip) = self.rotation_like(q, self.src.info[idx].dir, false);
         Match { x: x as f32, y: y as f32, c, s, err: f32::INFINITY, i: i as u16, flip, ok: true }
     }
 
-    /// Tries candidate center (i, x, y) with the given θ option(s) against `best`.
+    /// Tries candidate center (i, x, y) against `best`: with the θ option like `like` when
+    /// given (propagation), else with both options (random search).
     #[inline]
+    #[allow(clippy::too_many_arguments)]
     fn try_candidate(
         &self,
         q: usize,
@@ -126,12 +141,15 @@ impl Ctx<'_> {
         i: usize,
         x: f32,
         y: f32,
-        flips: &[bool],
+        like: Option<bool>,
         stats: &mut Stats,
     ) {
         let Some(s_dir) = self.check(self.wanted_segment(q), i, x, y) else { return };
-        for &f in flips {
-            let (c, s, flip) = self.rotation(q, s_dir, f);
+        let (opts, n) = match like {
+            Some(f) => ([self.rotation_like(q, s_dir, f); 2], 1),
+            None => self.rotations(q, s_dir),
+        };
+        for &(c, s, flip) in &opts[..n] {
             stats.evaluations += 1;
             let e = patch_error(self.src, self.omega, self.tgt, query, i, x, y, c, s, flip, best.err);
             if e < best.err {
@@ -163,17 +181,16 @@ impl Ctx<'_> {
             }
             // Jacobian of the rotation: one step in the target is M·e in the source.
             let (dx, dy) = n.rotate(e.0, e.1);
-            self.try_candidate(q, query, &mut best, n.i as usize, n.x + dx, n.y + dy, &[n.flip], stats);
+            self.try_candidate(q, query, &mut best, n.i as usize, n.x + dx, n.y + dy, Some(n.flip), stats);
         }
         // Random search in windows of size α^k·(w, h, l_S) around the current best.
-        let both: &[bool] = if self.direction_rule { &[false, true] } else { &[false] };
         let (mut rx, mut ry, mut ri) = (self.src.w as f32, self.src.h as f32, self.src.frames as f32);
         let last = (self.src.frames - 1) as f32;
         while rx >= 1.0 || ry >= 1.0 {
             let x = (best.x + rng.range_f32(-rx, rx)).round();
             let y = (best.y + rng.range_f32(-ry, ry)).round();
             let i = (best.i as f32 + rng.range_f32(-ri, ri)).round().clamp(0.0, last);
-            self.try_candidate(q, query, &mut best, i as usize, x, y, both, stats);
+            self.try_candidate(q, query, &mut best, i as usize, x, y, None, stats);
             rx *= self.alpha;
             ry *= self.alpha;
             ri *= self.alpha;

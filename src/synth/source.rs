@@ -45,9 +45,11 @@ impl Quant {
     }
 
     /// Per-lane weights of squared differences in quantization units:
-    /// `[1, 1, 1, w_df, w_ext, w_ext, 0, 0] · scale²` (the color lanes get w_col per query).
-    pub fn weights(&self, w_df: f32, w_ext: f32) -> [f32; LANES] {
-        let w = [1.0, 1.0, 1.0, w_df, w_ext, w_ext, 0.0, 0.0];
+    /// `[1/v, 1/v, 1/v, w_df, w_ext, w_ext, 0, 0] · scale²`, where `v` is the exemplar's color
+    /// variance unit ([`color_variance`]); the color lanes get w_col per query.
+    pub fn weights(&self, w_df: f32, w_ext: f32, v: f32) -> [f32; LANES] {
+        let c = 1.0 / v;
+        let w = [c, c, c, w_df, w_ext, w_ext, 0.0, 0.0];
         std::array::from_fn(|k| w[k] * self.scale[k] * self.scale[k])
     }
 }
@@ -71,7 +73,7 @@ pub(crate) const IN_MASK: u8 = 4;
 /// Per-pixel data not needed in the patch error's inner loop.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct PixInfo {
-    /// Unit flow direction (or (1, 0) where the flow is below [`FLOW_EPS`]).
+    /// Unit flow direction, or zero where the flow is below [`FLOW_EPS`] (undefined).
     pub dir: Vec2,
     /// Signed distance to the mask edge, full-resolution pixels.
     pub dist: f32,
@@ -83,12 +85,12 @@ pub(crate) struct PixInfo {
     pub flags: u8,
 }
 
-/// Unit direction of a flow vector, with the stable fallback (1, 0) where it is tiny
-/// ("rotation where there is no motion", DESIGN pitfalls).
+/// Unit direction of a flow vector, or zero where it is too small to have a direction
+/// ("rotation where there is no motion", DESIGN pitfalls: the rotation then falls back to θ = 0).
 #[inline]
 pub(crate) fn flow_dir(f: Vec2) -> Vec2 {
     let m = f.length();
-    if m >= FLOW_EPS && m.is_finite() { f / m } else { Vec2::X }
+    if m >= FLOW_EPS && m.is_finite() { f / m } else { Vec2::ZERO }
 }
 
 /// Dilates a mask by a square of radius `r` (Chebyshev distance).
@@ -218,6 +220,8 @@ pub struct SourcePyramid {
     pub(crate) ext_max: f32,
     /// The lanes' quantization.
     pub(crate) quant: Quant,
+    /// The color variance unit v ([`color_variance`]).
+    pub(crate) color_unit: f32,
     /// Border width b actually used (pixels).
     pub(crate) border_width: f32,
     /// Mean color of the exemplar outside its masks (≈ the paper).
@@ -257,6 +261,7 @@ impl SourcePyramid {
             [1.0, 1.0, 1.0]
         };
         let quant = Quant::new(ext_max);
+        let v = color_variance(frames, guides);
         let mut cur_rgb: Vec<Plane<Rgb>> = frames.to_vec();
         let mut cur_g: Vec<FrameGuides> = guides.to_vec();
         let mut out = Vec::with_capacity(levels);
@@ -265,22 +270,53 @@ impl SourcePyramid {
                 cur_rgb = cur_rgb.iter().map(img::downsample2).collect();
                 cur_g = cur_g.iter().map(|g| g.downsample2()).collect();
             }
-            out.push(build_level(&cur_rgb, &cur_g, &quant, quant.weights(params.w_df, params.w_ext), border_width));
+            out.push(build_level(&cur_rgb, &cur_g, &quant, quant.weights(params.w_df, params.w_ext, v), border_width));
         }
-        SourcePyramid {
-            levels: out,
-            ext_max,
-            quant,
-            border_width,
-            paper,
-            size: frames[0].size(),
-        }
+        SourcePyramid { levels: out, ext_max, quant, color_unit: v, border_width, paper, size: frames[0].size() }
     }
 
     /// Number of levels.
     pub fn levels(&self) -> usize {
         self.levels.len()
     }
+}
+
+/// The unit in which color differences are measured: the exemplar's mean local color variance,
+/// `v = E[Σ_c Var_{5×5}(S_c)]` over mask pixels (sampled), clamped to `[1e-4, 1]`.
+///
+/// The papers' weights (w_df, w_ext, w_prev, λ) are relative to the color term, whose size
+/// depends on how contrasted the exemplar is: a faint wash has color differences a hundred
+/// times smaller than an ink. Measuring colors in units of the exemplar's own texture contrast
+/// makes the weights mean the same for every exemplar: a random pairing of pixels from one
+/// texture costs about 2 per pixel.
+pub(crate) fn color_variance(frames: &[Plane<Rgb>], guides: &[FrameGuides]) -> f32 {
+    let mut sum = 0.0f64;
+    let mut n = 0usize;
+    let step = (frames.len() / 8).max(1);
+    for (f, g) in frames.iter().zip(guides).step_by(step) {
+        let (w, h) = f.size();
+        for y in (2..h.saturating_sub(2)).step_by(3) {
+            for x in (2..w.saturating_sub(2)).step_by(3) {
+                if !g.mask.get(x, y) {
+                    continue;
+                }
+                let mut m = [0.0f64; 3];
+                let mut m2 = [0.0f64; 3];
+                for dy in 0..5 {
+                    for dx in 0..5 {
+                        let c = f.get(x + dx - 2, y + dy - 2);
+                        for k in 0..3 {
+                            m[k] += c[k] as f64;
+                            m2[k] += (c[k] as f64).powi(2);
+                        }
+                    }
+                }
+                sum += (0..3).map(|k| (m2[k] / 25.0 - (m[k] / 25.0).powi(2)).max(0.0)).sum::<f64>();
+                n += 1;
+            }
+        }
+    }
+    if n == 0 { 1e-2 } else { ((sum / n as f64) as f32).clamp(1e-4, 1.0) }
 }
 
 fn build_level(rgb: &[Plane<Rgb>], guides: &[FrameGuides], qn: &Quant, lane_w: [f32; LANES], b: f32) -> SourceLevel {
@@ -347,7 +383,7 @@ mod tests {
 
     #[test]
     fn flow_dir_fallback() {
-        assert_eq!(flow_dir(Vec2::new(0.001, 0.0)), Vec2::X);
+        assert_eq!(flow_dir(Vec2::new(0.001, 0.0)), Vec2::ZERO);
         assert!((flow_dir(Vec2::new(0.0, -3.0)) - Vec2::new(0.0, -1.0)).length() < 1e-6);
     }
 }

@@ -50,8 +50,15 @@ impl TargetLevel {
                 let en = g.ext_neg.get(x, y).min(cap);
                 let v = [fill[0], fill[1], fill[2], df, ep, en, 0.0, 0.0];
                 // Guide lanes on the source's 8-bit grid (identical guides compare exactly equal).
-                cur[py * stride + px] =
-                    std::array::from_fn(|k| if k < 3 { quant.units(k, v[k]) } else if k < 6 { quant.quantize(k, v[k]) as f32 } else { 0.0 });
+                cur[py * stride + px] = std::array::from_fn(|k| {
+                    if k < 3 {
+                        quant.units(k, v[k])
+                    } else if k < 6 {
+                        quant.quantize(k, v[k]) as f32
+                    } else {
+                        0.0
+                    }
+                });
             }
         }
         for y in 0..h {
