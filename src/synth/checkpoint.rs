@@ -55,7 +55,7 @@ impl Synthesizer {
         let src = &self.source.pyramid;
         format!(
             "{:?}|{}x{}x{}|b={}|v={}|paper={:?}",
-            self.params, src.size.0, src.size.1, src.levels[0].frames, src.border_width, src.paper
+            self.params, src.size.0, src.size.1, src.levels[0].frames, src.border_width, src.color_unit, src.paper
         )
     }
 
