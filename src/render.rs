@@ -1,0 +1,496 @@
+//! The whole pipeline behind `fluidymation render`: every region of an animation is
+//! synthesized with its exemplar (layers in parallel, frames in order), recolored to the
+//! region's own colors, composited in z-order over the background and written as numbered PNG
+//! frames, optionally as stylized layers and a GIF.
+//!
+//! ```no_run
+//! use fluidymation::{anim, render::{self, RenderOptions}, NoProgress};
+//! # fn main() -> fluidymation::Result<()> {
+//! let a = anim::load("fixtures/demo/waving.json".as_ref(), &Default::default())?;
+//! let mut opts = RenderOptions::new("out".into(), 0..a.frames);
+//! opts.gif = Some("out/demo.gif".into());
+//! opts.styles.push(("body".into(), "ink-rims".into()));
+//! let summary = render::render(&a, &opts, &NoProgress)?;
+//! println!("{} frames, {:.2} s per frame", summary.frames, summary.seconds_per_frame());
+//! # Ok(()) }
+//! ```
+//!
+//! An interrupted render keeps, after every completed frame, the state each layer's
+//! synthesizer carries to the next frame in `OUT_DIR/.fluidymation/`; [`RenderOptions::resume`]
+//! continues from there and gives the same frames as an uninterrupted run.
+
+use crate::anim::{Animation, RegionFrame};
+use crate::composite::{self, Background, LayerFrame, Pigment, Recolor, StrokeMode, StylizedLayer};
+use crate::error::{Error, Result};
+use crate::eval;
+use crate::exemplar::{self, Exemplar, SearchPath};
+use crate::guide::GuideStream;
+use crate::img::{self, Plane, Rgba};
+use crate::output::{self, GifOptions, GifWriter};
+use crate::progress::Progress;
+use crate::synth::{Params, Source, Synthesizer};
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The style name that leaves a layer flat.
+pub const NO_STYLE: &str = "none";
+
+/// What to render and how.
+#[derive(Clone, Debug)]
+pub struct RenderOptions {
+    /// Directory of the PNG frames (`NNNN.png`, numbered by animation frame, 0001 = the first).
+    pub out_dir: PathBuf,
+    /// Also write an animated GIF here.
+    pub gif: Option<PathBuf>,
+    /// Per-layer styles: a layer name or 1-based index, and an exemplar name or folder, or
+    /// [`NO_STYLE`] to leave the layer flat.
+    pub styles: Vec<(String, String)>,
+    /// The style of every other layer. Default: the bundled default exemplar.
+    pub default_style: Option<String>,
+    /// Extra folders to look up exemplars by name.
+    pub exemplar_dirs: Vec<PathBuf>,
+    /// `none`/`transparent`, a color (`#rrggbb`, `white` …) or an image file; `None` = the
+    /// animation's own background (white when it has none).
+    pub background: Option<String>,
+    /// How stylized layers are recolored.
+    pub recolor: Recolor,
+    /// What happens to strokes.
+    pub strokes: StrokeMode,
+    /// Frames to render (0-based); guides are computed over this range only.
+    pub frames: Range<usize>,
+    /// Engine parameters.
+    pub params: Params,
+    /// The canvas scale the animation was loaded with (`--scale`); exemplars, blur and
+    /// modulation bounds are scaled alike so a preview looks like the full render.
+    pub scale: f32,
+    /// Also write each layer under `OUT_DIR/layers/NN_slug/`.
+    pub keep_layers: bool,
+    /// Continue an interrupted render in `out_dir`.
+    pub resume: bool,
+    /// Measure every stylized layer against its exemplar afterwards ([`eval`]).
+    pub eval: bool,
+}
+
+impl RenderOptions {
+    /// Defaults for rendering `frames` into `out_dir`.
+    pub fn new(out_dir: PathBuf, frames: Range<usize>) -> RenderOptions {
+        RenderOptions {
+            out_dir,
+            gif: None,
+            styles: Vec::new(),
+            default_style: None,
+            exemplar_dirs: Vec::new(),
+            background: None,
+            recolor: Recolor::Glaze,
+            strokes: StrokeMode::Keep,
+            frames,
+            params: Params::default(),
+            scale: 1.0,
+            keep_layers: false,
+            resume: false,
+            eval: false,
+        }
+    }
+}
+
+/// What one layer got.
+#[derive(Clone, Debug)]
+pub struct LayerSummary {
+    /// 1-based index from the top.
+    pub index: usize,
+    /// The layer's name.
+    pub name: String,
+    /// The exemplar it was stylized with (`None` = left flat).
+    pub exemplar: Option<String>,
+    /// Seconds spent synthesizing it (summed over frames).
+    pub seconds: f64,
+    /// The quality report, with [`RenderOptions::eval`].
+    pub eval: Option<eval::Report>,
+}
+
+/// What a render did.
+#[derive(Clone, Debug)]
+pub struct RenderSummary {
+    /// Frames written by this run.
+    pub frames: usize,
+    /// Frames that were already done when resuming.
+    pub resumed: usize,
+    /// Wall-clock seconds of this run.
+    pub seconds: f64,
+    /// The frames' directory.
+    pub frame_dir: PathBuf,
+    /// The GIF, when written.
+    pub gif: Option<PathBuf>,
+    /// Per layer, top-most first.
+    pub layers: Vec<LayerSummary>,
+}
+
+impl RenderSummary {
+    /// Wall-clock seconds per frame written.
+    pub fn seconds_per_frame(&self) -> f64 {
+        if self.frames == 0 { 0.0 } else { self.seconds / self.frames as f64 }
+    }
+}
+
+/// One exemplar prepared for this render.
+struct Style {
+    name: String,
+    exemplar: Exemplar,
+    source: Source,
+    pigment: Pigment,
+    params: Params,
+}
+
+/// The per-layer state of a render.
+struct Layer {
+    region: usize,
+    style: Option<usize>,
+    synth: Option<Synthesizer>,
+    guides: Option<GuideStream>,
+    seconds: f64,
+    /// Exemplar-colored frames and target coverages, for `eval` (8-bit to save memory).
+    kept: Vec<(Vec<u8>, Vec<u8>)>,
+}
+
+/// Folder of the resume state inside the output directory.
+pub const STATE_DIR: &str = ".fluidymation";
+
+fn fnv(s: &str) -> u64 {
+    s.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ b as u64).wrapping_mul(0x0100_0000_01b3))
+}
+
+/// The region to synthesize for one frame: the fill, with the strokes merged under
+/// [`StrokeMode::Stylize`].
+fn target_fill(rf: &RegionFrame, strokes: StrokeMode) -> Plane<Rgba> {
+    if strokes == StrokeMode::Stylize { composite::merge_strokes(&rf.fill, rf.strokes.as_ref()) } else { rf.fill.clone() }
+}
+
+/// Resolves every region's style: explicit `styles` first, then the default.
+fn resolve_styles(anim: &Animation, opts: &RenderOptions) -> Result<Vec<Option<String>>> {
+    let default = opts.default_style.clone().unwrap_or_else(|| exemplar::DEFAULT.to_string());
+    let mut out: Vec<Option<String>> =
+        vec![if default == NO_STYLE { None } else { Some(default) }; anim.regions.len()];
+    for (key, style) in &opts.styles {
+        let i = anim.find_region(key)?;
+        out[i] = if style == NO_STYLE { None } else { Some(style.clone()) };
+    }
+    Ok(out)
+}
+
+/// Parameters for one exemplar at the render's scale.
+fn style_params(base: &Params, ex: &Exemplar, scale: f32) -> Result<Params> {
+    if (scale - 1.0).abs() < 1e-6 {
+        return Ok(base.clone());
+    }
+    let g = base.guide();
+    let (ml, mu) = base.prev_bounds();
+    let mut b = base.to_builder()
+        .src_scale(base.src_scale().unwrap_or(ex.meta.scale) * scale)
+        .blur_sigma(g.blur_sigma * scale)
+        .prev_bounds(ml * scale, mu * scale);
+    if let Some(bw) = base.border_width() {
+        b = b.border_width(bw * scale);
+    }
+    b.build()
+}
+
+/// Renders `anim` as `opts` says; see the [module documentation](self).
+pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -> Result<RenderSummary> {
+    let start = Instant::now();
+    if anim.regions.is_empty() {
+        return Err(Error::Empty {
+            path: anim.path.clone(),
+            what: "there are no layers to stylize (only a background, hidden or empty layers)".into(),
+        });
+    }
+    let range = opts.frames.start.min(anim.frames)..opts.frames.end.min(anim.frames);
+    if range.is_empty() {
+        return Err(Error::param("frames", format!("{:?}", opts.frames), format!("a range inside 1..={}", anim.frames)));
+    }
+    let (w, h) = (anim.width as usize, anim.height as usize);
+    let background = match &opts.background {
+        None => Background::from_animation(anim.background.as_ref()),
+        Some(spec) => Background::parse(spec, w, h)?,
+    };
+    let styles_of = resolve_styles(anim, opts)?;
+
+    // Exemplars, each prepared once (guides and pyramid shared by its layers).
+    let search = SearchPath::standard(&opts.exemplar_dirs);
+    let mut names: Vec<String> = styles_of.iter().flatten().cloned().collect();
+    names.sort();
+    names.dedup();
+    let exemplars: Vec<Exemplar> = names.iter().map(|n| exemplar::find(n, &search)).collect::<Result<_>>()?;
+    output::prepare_dir(&opts.out_dir)?;
+    if let Some(gif) = &opts.gif
+        && let Some(dir) = gif.parent().filter(|d| !d.as_os_str().is_empty())
+    {
+        output::prepare_dir(dir)?;
+    }
+    let styles: Vec<Style> = names
+        .iter()
+        .zip(exemplars)
+        .map(|(name, ex)| {
+            let params = style_params(&opts.params, &ex, opts.scale)?;
+            let source = Source::prepare(&ex, &params)?;
+            let pigment = Pigment::from_exemplar(&ex);
+            Ok(Style { name: name.clone(), exemplar: ex, source, pigment, params })
+        })
+        .collect::<Result<_>>()?;
+    let style_index = |n: &Option<String>| n.as_ref().and_then(|n| names.iter().position(|m| m == n));
+
+    // Per-layer synthesizers and guide streams (the guides' backward pass runs here).
+    let n = range.len();
+    let total_stage = "frames";
+    let mut layers: Vec<Layer> = (0..anim.regions.len())
+        .into_par_iter()
+        .map(|region| -> Result<Layer> {
+            let style = style_index(&styles_of[region]);
+            let (synth, guides) = match style {
+                None => (None, None),
+                Some(s) => {
+                    let st = &styles[s];
+                    let first = range.start;
+                    let strokes = opts.strokes;
+                    let stream = GuideStream::new(
+                        n,
+                        |k| Ok(target_fill(&anim.render(region, first + k)?, strokes).map(|c| c[3])),
+                        st.params.guide(),
+                    )?;
+                    (Some(Synthesizer::new(st.source.clone(), st.params.clone())?), Some(stream))
+                }
+            };
+            Ok(Layer { region, style, synth, guides, seconds: 0.0, kept: Vec::new() })
+        })
+        .collect::<Result<_>>()?;
+
+    // Resume.
+    let state_dir = opts.out_dir.join(STATE_DIR);
+    let fingerprint = fnv(&format!(
+        "{}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{}|{}|{:?}",
+        anim.path.display(),
+        range,
+        styles_of,
+        opts.recolor,
+        opts.strokes,
+        opts.background,
+        opts.params,
+        opts.scale,
+        w * 100_000 + h,
+        styles.iter().map(|s| s.source.frames()).collect::<Vec<_>>()
+    ));
+    let mut done = 0usize;
+    if opts.resume {
+        done = restore(&state_dir, fingerprint, &mut layers, anim)?;
+        for l in layers.iter_mut() {
+            if let Some(g) = l.guides.as_mut() {
+                for _ in 0..done {
+                    g.next().transpose()?;
+                }
+            }
+        }
+    } else if state_dir.exists() {
+        let _ = std::fs::remove_dir_all(&state_dir);
+    }
+    if done < n {
+        std::fs::create_dir_all(&state_dir).map_err(|e| Error::io(&state_dir, e))?;
+    }
+
+    let layer_dirs: Vec<PathBuf> = anim.regions.iter().map(|r| output::layer_dir(&opts.out_dir, r)).collect();
+    if opts.keep_layers {
+        for d in &layer_dirs {
+            output::prepare_dir(d)?;
+        }
+    }
+    let stages: Vec<String> = anim.regions.iter().map(|r| format!("{:02} {}", r.index, r.name)).collect();
+    for (l, s) in layers.iter().zip(&stages) {
+        if l.synth.is_some() && !progress.update(s, done, n) {
+            return Err(Error::Cancelled);
+        }
+    }
+    if !progress.update(total_stage, done, n) {
+        return Err(Error::Cancelled);
+    }
+    let mut written = 0usize;
+    for k in done..n {
+        let frame = range.start + k;
+        let results: Vec<(Option<StylizedLayer>, RegionFrame)> = layers
+            .par_iter_mut()
+            .map(|l| -> Result<(Option<StylizedLayer>, RegionFrame)> {
+                let rf = anim.render(l.region, frame)?;
+                let (Some(synth), Some(guides), Some(s)) = (l.synth.as_mut(), l.guides.as_mut(), l.style) else {
+                    return Ok((None, rf));
+                };
+                let t0 = Instant::now();
+                let g = guides.next().ok_or_else(|| Error::Empty {
+                    path: anim.path.clone(),
+                    what: format!("the guides ended before frame {}", frame + 1),
+                })??;
+                let out = synth.step(&g)?;
+                let flat = target_fill(&rf, opts.strokes);
+                let layer = composite::recolor_with(&out.rgb, &out.mask, &flat, &styles[s].pigment, opts.recolor)?;
+                l.seconds += t0.elapsed().as_secs_f64();
+                if opts.eval {
+                    let rgba: Vec<u8> = out
+                        .rgb
+                        .data()
+                        .iter()
+                        .zip(out.mask.data())
+                        .flat_map(|(c, &m)| {
+                            let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
+                            [q(c[0]), q(c[1]), q(c[2]), if m { 255 } else { 0 }]
+                        })
+                        .collect();
+                    let cov: Vec<u8> = flat.data().iter().map(|c| (c[3].clamp(0.0, 1.0) * 255.0 + 0.5) as u8).collect();
+                    l.kept.push((rgba, cov));
+                }
+                Ok((Some(layer), rf))
+            })
+            .collect::<Result<_>>()?;
+        // Bottom to top: regions are listed top-most first.
+        let frames: Vec<LayerFrame> = results
+            .iter()
+            .rev()
+            .map(|(st, rf)| match st {
+                Some(l) => LayerFrame::stylized(l, rf.strokes.as_ref()),
+                None => LayerFrame::flat(&rf.fill, rf.strokes.as_ref()),
+            })
+            .collect();
+        let image = composite::composite(w, h, &background, &frames, opts.strokes)?;
+        if opts.keep_layers {
+            for ((st, rf), dir) in results.iter().zip(&layer_dirs) {
+                let layer = match st {
+                    Some(l) => l.to_rgba(),
+                    None => rf.fill.clone(),
+                };
+                output::write_frame(dir, frame, anim.frames, &layer)?;
+            }
+        }
+        output::write_frame(&opts.out_dir, frame, anim.frames, &image)?;
+        save_state(&state_dir, fingerprint, k + 1, &layers, &stages)?;
+        written += 1;
+        for (l, s) in layers.iter().zip(&stages) {
+            if l.synth.is_some() && !progress.update(s, k + 1, n) {
+                return Err(Error::Cancelled);
+            }
+        }
+        if !progress.update(total_stage, k + 1, n) {
+            return Err(Error::Cancelled);
+        }
+    }
+
+    // GIF from the written frames (which also covers resumed renders).
+    if let Some(gif) = &opts.gif {
+        let transparent = matches!(background, Background::Transparent);
+        let options = GifOptions { transparent, ..GifOptions::new(anim.fps) };
+        let mut writer = GifWriter::create(gif, w, h, options)?;
+        for frame in range.clone() {
+            let path = output::frame_path(&opts.out_dir, frame, anim.frames);
+            writer.add_frame(&img::load_rgba(&path)?)?;
+            if !progress.update("gif", frame - range.start + 1, n) {
+                return Err(Error::Cancelled);
+            }
+        }
+        writer.finish()?;
+    }
+    let _ = std::fs::remove_dir_all(&state_dir);
+
+    let mut summaries = Vec::with_capacity(layers.len());
+    for l in &layers {
+        let r = &anim.regions[l.region];
+        let report = match (opts.eval, l.style) {
+            (true, Some(s)) if !l.kept.is_empty() => Some(evaluate_layer(l, &styles[s], w, h)?),
+            _ => None,
+        };
+        summaries.push(LayerSummary {
+            index: r.index,
+            name: r.name.clone(),
+            exemplar: l.style.map(|s| styles[s].name.clone()),
+            seconds: l.seconds,
+            eval: report,
+        });
+    }
+    Ok(RenderSummary {
+        frames: written,
+        resumed: done,
+        seconds: start.elapsed().as_secs_f64(),
+        frame_dir: opts.out_dir.clone(),
+        gif: opts.gif.clone(),
+        layers: summaries,
+    })
+}
+
+fn evaluate_layer(l: &Layer, style: &Style, w: usize, h: usize) -> Result<eval::Report> {
+    let unorm = |v: u8| v as f32 / 255.0;
+    let frames: Vec<Plane<Rgba>> = l
+        .kept
+        .iter()
+        .map(|(rgba, _)| {
+            Plane::from_vec(w, h, rgba.chunks(4).map(|c| [unorm(c[0]), unorm(c[1]), unorm(c[2]), unorm(c[3])]).collect())
+                .unwrap_or_else(|| Plane::new(w, h))
+        })
+        .collect();
+    let masks: Vec<Plane<f32>> = l
+        .kept
+        .iter()
+        .map(|(_, cov)| Plane::from_vec(w, h, cov.iter().map(|&v| unorm(v)).collect()).unwrap_or_else(|| Plane::new(w, h)))
+        .collect();
+    let mut options = eval::EvalOptions::default();
+    options.src_scale = style.params.src_scale();
+    options.src_speed = style.params.src_speed();
+    eval::evaluate(&frames, &style.exemplar, &masks, &options)
+}
+
+fn state_file(dir: &Path, stage: &str) -> PathBuf {
+    dir.join(format!("{}.state", crate::anim::slug(stage)))
+}
+
+/// Writes the per-layer states and then the progress file (the commit point).
+fn save_state(dir: &Path, fingerprint: u64, done: usize, layers: &[Layer], stages: &[String]) -> Result<()> {
+    for (l, stage) in layers.iter().zip(stages) {
+        if let Some(s) = &l.synth {
+            let bytes = s.save_state();
+            img::atomic_write(&state_file(dir, stage), |w| w.write_all(&bytes))?;
+        }
+    }
+    let text = format!("fingerprint = {}\ndone = {}\n", fingerprint, done);
+    img::atomic_write(&dir.join("progress.toml"), |w| w.write_all(text.as_bytes()))
+}
+
+/// Restores the states written by [`save_state`]; returns how many frames were done.
+fn restore(dir: &Path, fingerprint: u64, layers: &mut [Layer], anim: &Animation) -> Result<usize> {
+    let path = dir.join("progress.toml");
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        Error::io(&path, std::io::Error::new(e.kind(), format!("nothing to resume ({}); render without --resume", e)))
+    })?;
+    let fields: BTreeMap<&str, &str> =
+        text.lines().filter_map(|l| l.split_once('=')).map(|(k, v)| (k.trim(), v.trim())).collect();
+    let corrupt = |m: &str| Error::Corrupt { path: path.clone(), message: m.to_string() };
+    let fp: u64 = fields.get("fingerprint").and_then(|v| v.parse().ok()).ok_or_else(|| corrupt("no fingerprint"))?;
+    let done: usize = fields.get("done").and_then(|v| v.parse().ok()).ok_or_else(|| corrupt("no frame count"))?;
+    if fp != fingerprint {
+        return Err(corrupt(
+            "the interrupted render used another input, frame range, style or parameters; \
+             resume with the same options, or render without --resume",
+        ));
+    }
+    for l in layers.iter_mut() {
+        if let Some(s) = l.synth.as_mut() {
+            let r = &anim.regions[l.region];
+            let file = state_file(dir, &format!("{:02} {}", r.index, r.name));
+            let bytes = std::fs::read(&file).map_err(|e| Error::io(&file, e))?;
+            s.load_state(&bytes, &file)?;
+            if s.frame() != done {
+                return Err(Error::Corrupt {
+                    path: file,
+                    message: format!("holds frame {} but the render stopped after {}", s.frame(), done),
+                });
+            }
+        }
+    }
+    Ok(done)
+}
+
+use std::io::Write as _;
