@@ -6,6 +6,7 @@
 //! in their own colors as straight RGBA, whose alpha is the region's antialiased coverage mask,
 //! with strokes kept apart so later stages can draw them crisp on top.
 
+pub mod lottie;
 mod masks;
 
 use crate::error::{Error, Result};
@@ -251,7 +252,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Animation> {
         return Err(Error::io(path, std::io::Error::new(std::io::ErrorKind::NotFound, "no such file or directory")));
     }
     match ext.as_deref() {
-        Some("json") | Some("lottie") => Err(Error::animation(path, "Lottie input is not supported yet")),
+        Some("json") => lottie::load(path, options),
         _ => Err(Error::animation(
             path,
             "unknown input: expected a Lottie .json file, a directory or glob of SVG frames, or a directory of PNG masks",

@@ -1,0 +1,120 @@
+//! Conformance of the Lottie rasterizer against ThorVG reference masks.
+//!
+//! `fixtures/lottie/<case>.json` has references in `fixtures/lottie/refs/<case>/` made by
+//! `scripts/lottie_refs.py` (ThorVG, one top-level layer at a time, alpha channel). Each
+//! reference is compared with our rendering of the same layer (fills and strokes) by soft IoU
+//! (Σ min(a, b) / Σ max(a, b) over the coverage values), which tolerates antialiasing
+//! differences but not misplaced geometry. Every tested layer and frame must reach
+//! [`MIN_IOU`], except the cases in [`IGNORED`], each with its reason.
+//!
+//! On failure, `target/lottie-diffs/<case>/L<layer>_f<frame>.png` shows
+//! expected | difference | actual side by side. Set `LOTTIE_CONFORMANCE_REPORT=1` to print
+//! the per-file table even when everything passes.
+
+use fluidymation::anim::lottie::{self, render};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+const MIN_IOU: f64 = 0.98;
+
+/// Cases (or `case/L<layer>`) not held to [`MIN_IOU`], with the reason.
+const IGNORED: &[(&str, &str)] = &[];
+
+fn fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/lottie")
+}
+
+fn load_gray(path: &Path) -> (u32, u32, Vec<u8>) {
+    let img = image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_luma8();
+    (img.width(), img.height(), img.into_raw())
+}
+
+fn soft_iou(a: &[u8], b: &[u8]) -> f64 {
+    let (mut inter, mut union) = (0u64, 0u64);
+    for (&x, &y) in a.iter().zip(b) {
+        inter += x.min(y) as u64;
+        union += x.max(y) as u64;
+    }
+    if union == 0 { 1.0 } else { inter as f64 / union as f64 }
+}
+
+fn write_diff(path: &Path, w: u32, h: u32, expected: &[u8], actual: &[u8]) {
+    let mut out = image::RgbImage::new(w * 3, h);
+    for y in 0..h {
+        for x in 0..w {
+            let i = (y * w + x) as usize;
+            let (e, a) = (expected[i], actual[i]);
+            out.put_pixel(x, y, image::Rgb([e, e, e]));
+            let d = if e > a { [e - a, 0, 0] } else { [0, a - e, 0] };
+            out.put_pixel(w + x, y, image::Rgb(d));
+            out.put_pixel(2 * w + x, y, image::Rgb([a, a, a]));
+        }
+    }
+    if let Some(dir) = path.parent() {
+        let _ = std::fs::create_dir_all(dir);
+    }
+    let _ = out.save(path);
+}
+
+fn ignored(case: &str, layer: usize) -> Option<&'static str> {
+    let key = format!("{case}/L{layer}");
+    IGNORED.iter().find(|(k, _)| *k == case || *k == key).map(|(_, why)| *why)
+}
+
+#[test]
+fn lottie_conformance_against_thorvg() {
+    let dir = fixtures();
+    let mut cases: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .collect();
+    cases.sort();
+    let diffs = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/lottie-diffs");
+    let mut failures = Vec::new();
+    let mut table: BTreeMap<String, (f64, usize, bool)> = BTreeMap::new();
+    let mut compared = 0;
+    for case_path in &cases {
+        let case = case_path.file_stem().unwrap().to_string_lossy().into_owned();
+        let index = dir.join("refs").join(&case).join("index.tsv");
+        let Ok(index) = std::fs::read_to_string(&index) else { continue };
+        let text = std::fs::read_to_string(case_path).unwrap();
+        let model = lottie::parse(case_path, &text).unwrap_or_else(|e| panic!("{case}: {e}"));
+        let (w, h) = (model.width.round() as u32, model.height.round() as u32);
+        for row in index.lines().skip(1) {
+            let cols: Vec<&str> = row.split('\t').collect();
+            if cols.len() < 4 {
+                continue;
+            }
+            let layer: usize = cols[0].parse().unwrap();
+            let frame: usize = cols[2].parse().unwrap();
+            let (rw, rh, expected) = load_gray(&dir.join("refs").join(&case).join(cols[3]));
+            assert_eq!((rw, rh), (w, h), "{case}: reference size");
+            let target = render::Target { layer, child: None };
+            let pm = render::render(&model, target, model.ip + frame as f32, w, h, 1.0, render::Pass::All);
+            let actual: Vec<u8> = pm.pixels().iter().map(|p| p.alpha()).collect();
+            let iou = soft_iou(&expected, &actual);
+            compared += 1;
+            let why = ignored(&case, layer);
+            let e = table.entry(case.clone()).or_insert((1.0, 0, false));
+            e.0 = e.0.min(iou);
+            e.1 += 1;
+            e.2 |= why.is_some();
+            if iou < MIN_IOU {
+                let out = diffs.join(&case).join(format!("L{layer}_f{frame}.png"));
+                write_diff(&out, w, h, &expected, &actual);
+                if why.is_none() {
+                    failures.push(format!("{case} layer {layer} '{}' frame {frame}: IoU {iou:.4}", cols[1]));
+                }
+            }
+        }
+    }
+    if std::env::var_os("LOTTIE_CONFORMANCE_REPORT").is_some() || !failures.is_empty() {
+        eprintln!("{:<28} {:>6} {:>8}", "file", "refs", "min IoU");
+        for (case, (min, n, ign)) in &table {
+            eprintln!("{case:<28} {n:>6} {min:>8.4}{}", if *ign { "  (ignored)" } else { "" });
+        }
+    }
+    assert!(compared > 100, "only {compared} references found");
+    assert!(failures.is_empty(), "{} comparisons below {MIN_IOU}:\n{}", failures.len(), failures.join("\n"));
+}
