@@ -490,6 +490,41 @@ pub fn trim(paths: &[Bez], s: f32, e: f32, o: f32, sequential: bool) -> Vec<Bez>
     out
 }
 
+/// Sequential trim over all `paths` as one sequence; returns, for each input path, the
+/// pieces that remain of it (so that callers can give them back to their owners).
+pub fn trim_sequential_per_path(paths: &[Bez], s: f32, e: f32, o: f32) -> Vec<Vec<Bez>> {
+    let Some((a, b)) = trim_range(s, e, o) else { return paths.iter().map(|p| vec![p.clone()]).collect() };
+    if b <= a {
+        return paths.iter().map(|_| Vec::new()).collect();
+    }
+    let measured: Vec<Measured> = paths.iter().map(Measured::new).collect();
+    let total: f32 = measured.iter().map(|m| m.length()).sum();
+    if measured.len() == 1 {
+        let mut out = Vec::new();
+        measured[0].extract_wrapping(a * total, b * total, &mut out);
+        return vec![out];
+    }
+    let mut ranges = vec![(a * total, b.min(1.0) * total)];
+    if b > 1.0 {
+        ranges.push((0.0, (b - 1.0) * total));
+    }
+    let mut acc = 0.0;
+    let mut result = Vec::with_capacity(paths.len());
+    for m in &measured {
+        let len = m.length();
+        let mut pieces = Vec::new();
+        for &(ra, rb) in &ranges {
+            let (x, y) = ((ra - acc).max(0.0), (rb - acc).min(len));
+            if y > x {
+                pieces.extend(m.extract(x, y));
+            }
+        }
+        result.push(pieces);
+        acc += len;
+    }
+    result
+}
+
 /// Rounds sharp corners (vertices without tangents) with radius `r`.
 pub fn round_corners(p: &Bez, r: f32) -> Bez {
     let n = p.v.len();

@@ -603,8 +603,15 @@ pub struct Layer {
 }
 
 impl Layer {
-    /// Layer-local time for composition time `t`.
+    /// The time at which the layer's own properties are evaluated for composition time `t`.
+    /// Keyframe times are stored in the time of the containing composition (Bodymovin, and
+    /// lottie-web / ThorVG, do not shift them by `st`), so this is `t` itself.
     pub fn local_time(&self, t: f32) -> f32 {
+        t
+    }
+
+    /// The time inside a precomp layer's content for composition time `t`: `(t − st) / sr`.
+    pub fn inner_time(&self, t: f32) -> f32 {
         (t - self.st) / self.sr
     }
 

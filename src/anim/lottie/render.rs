@@ -185,7 +185,7 @@ impl Ctx<'_> {
             Content::Precomp { comp, width, height } => {
                 let inner_t = match &layer.time_remap {
                     Some(tm) => tm.evaluate(lt) * self.model.fps,
-                    None => lt,
+                    None => layer.inner_time(lt),
                 };
                 if !inner_t.is_finite() {
                     return;
@@ -302,36 +302,47 @@ impl Ctx<'_> {
         clip: Option<&Mask>,
         target: &mut Pixmap,
     ) {
+        let mut tree = evaluate(items, t, 0);
+        apply_modifiers(&mut tree);
+        self.draw_tree(&tree, t, m, alpha, pass, clip, target);
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn draw_tree(
+        &self,
+        items: &[Item],
+        t: f32,
+        m: Affine2,
+        alpha: f32,
+        pass: Pass,
+        clip: Option<&Mask>,
+        target: &mut Pixmap,
+    ) {
         for k in (0..items.len()).rev() {
             match &items[k] {
-                Shape::Group { items: inner, transform } => {
-                    let o = transform.opacity(t);
-                    if o > 0.0 {
-                        self.draw_items(inner, t, m * transform.matrix(t), alpha * o, pass, clip, target);
+                Item::Group { items: inner, matrix, opacity } => {
+                    if *opacity > 0.0 {
+                        self.draw_tree(inner, t, m * *matrix, alpha * opacity, pass, clip, target);
                     }
                 }
-                Shape::Fill { paint, opacity, even_odd } if pass.fills() => {
-                    let paths = collect(&items[..k], t);
+                Item::Other(Shape::Fill { paint, opacity, even_odd }) if pass.fills() => {
+                    let paths = collect(&items[..k]);
                     let o = alpha * (opacity.evaluate(t) / 100.0).clamp(0.0, 1.0);
                     let rule = if *even_odd { FillRule::EvenOdd } else { FillRule::Winding };
                     self.fill(&paths, paint, o, rule, t, m, clip, target);
                 }
-                Shape::Stroke { paint, opacity, style } if pass.strokes() => {
-                    let paths = collect(&items[..k], t);
+                Item::Other(Shape::Stroke { paint, opacity, style }) if pass.strokes() => {
+                    let paths = collect(&items[..k]);
                     let o = alpha * (opacity.evaluate(t) / 100.0).clamp(0.0, 1.0);
                     self.stroke(&paths, paint, o, style, t, m, clip, target);
                 }
-                Shape::Repeater { copies, offset, transform, start_opacity, end_opacity, above } => {
-                    let n = copies.evaluate(t).clamp(0.0, super::model::MAX_COPIES);
-                    let n = if n.is_finite() { n.ceil() as usize } else { 0 };
-                    let off = offset.evaluate(t);
-                    let (so, eo) = (start_opacity.evaluate(t) / 100.0, end_opacity.evaluate(t) / 100.0);
+                Item::Repeater { copies, start_opacity, end_opacity, above } => {
+                    let n = copies.len();
                     let order: Vec<usize> = if *above { (0..n).collect() } else { (0..n).rev().collect() };
                     for c in order {
                         let f = if n > 1 { c as f32 / (n - 1) as f32 } else { 0.0 };
-                        let o = (so + (eo - so) * f).clamp(0.0, 1.0);
-                        let rm = repeater_matrix(transform, t, c as f32 + off);
-                        self.draw_items(&items[..k], t, m * rm, alpha * o, pass, clip, target);
+                        let o = (start_opacity + (end_opacity - start_opacity) * f).clamp(0.0, 1.0);
+                        self.draw_tree(&items[..k], t, m * copies[c], alpha * o, pass, clip, target);
                     }
                     return;
                 }
@@ -376,8 +387,34 @@ impl Ctx<'_> {
         if opacity <= 0.0 || !opacity.is_finite() || !(width > 0.0) || !width.is_finite() {
             return;
         }
-        let (Some(path), Some(ts)) = (geom::to_skia_path(paths), to_ts(&m)) else { return };
+        let Some(ts) = to_ts(&m) else { return };
         let Some(p) = make_paint(paint, opacity, t) else { return };
+        let Some(path) = geom::to_skia_path(paths) else {
+            // Zero-length paths: round and square caps still draw a dot (as browsers do).
+            if style.cap == tiny_skia::LineCap::Butt {
+                return;
+            }
+            let mut pb = tiny_skia::PathBuilder::new();
+            for b in paths.iter().filter(|b| !b.v.is_empty() && b.v.iter().all(|v| *v == b.v[0])) {
+                let c = b.v[0];
+                if !c.is_finite() {
+                    continue;
+                }
+                let r = width / 2.0;
+                match style.cap {
+                    tiny_skia::LineCap::Round => pb.push_circle(c.x, c.y, r),
+                    _ => {
+                        if let Some(rect) = tiny_skia::Rect::from_xywh(c.x - r, c.y - r, width, width) {
+                            pb.push_rect(rect)
+                        }
+                    }
+                }
+            }
+            if let Some(dots) = pb.finish() {
+                target.fill_path(&dots, &p, FillRule::Winding, ts, clip);
+            }
+            return;
+        };
         let mut stroke = tiny_skia::Stroke {
             width,
             miter_limit: style.miter,
@@ -495,17 +532,49 @@ fn repeater_matrix(tr: &super::model::Transform, t: f32, i: f32) -> Affine2 {
     Affine2::from_translation(p * i + a) * Affine2::from_angle(r * i) * Affine2::from_scale(sp) * Affine2::from_translation(-a)
 }
 
-/// The geometry of the items, in the items' coordinate space, after the modifiers among them.
-pub fn collect(items: &[Shape], t: f32) -> Vec<Bez> {
-    let mut out: Vec<Bez> = Vec::new();
+/// A shape item evaluated at one time: geometry as paths, groups with their matrix.
+pub enum Item<'a> {
+    /// A geometry item's paths (after the modifiers that apply to it).
+    Geometry(Vec<Bez>),
+    /// A group.
+    Group {
+        /// Its items.
+        items: Vec<Item<'a>>,
+        /// Its transform.
+        matrix: Affine2,
+        /// Its opacity in `0..=1`.
+        opacity: f32,
+    },
+    /// A repeater: per-copy matrices and the opacity fade.
+    Repeater {
+        /// One matrix per copy.
+        copies: Vec<Affine2>,
+        /// Opacity of the first copy.
+        start_opacity: f32,
+        /// Opacity of the last copy.
+        end_opacity: f32,
+        /// Copies stacked above the original.
+        above: bool,
+    },
+    /// Trim paths: start, end (fractions), offset (turns), sequential.
+    Trim(f32, f32, f32, bool),
+    /// Rounded corners with this radius.
+    Round(f32),
+    /// Styles and anything else, evaluated when drawn.
+    Other(&'a Shape),
+}
+
+/// Evaluates the shape items at `t`.
+pub fn evaluate(items: &[Shape], t: f32, depth: usize) -> Vec<Item<'_>> {
+    let mut out = Vec::with_capacity(items.len());
     for item in items {
-        match item {
-            Shape::Path(v) => out.push(v.evaluate(t)),
+        out.push(match item {
+            Shape::Path(v) => Item::Geometry(vec![v.evaluate(t)]),
             Shape::Rect { position, size, roundness, reverse } => {
-                out.push(geom::rect(position.evaluate(t), size.evaluate(t), roundness.evaluate(t), *reverse))
+                Item::Geometry(vec![geom::rect(position.evaluate(t), size.evaluate(t), roundness.evaluate(t), *reverse)])
             }
             Shape::Ellipse { position, size, reverse } => {
-                out.push(geom::ellipse(position.evaluate(t), size.evaluate(t), *reverse))
+                Item::Geometry(vec![geom::ellipse(position.evaluate(t), size.evaluate(t), *reverse)])
             }
             Shape::Star {
                 star,
@@ -517,7 +586,7 @@ pub fn collect(items: &[Shape], t: f32) -> Vec<Bez> {
                 inner_radius,
                 inner_roundness,
                 reverse,
-            } => out.push(geom::polystar(&Star {
+            } => Item::Geometry(vec![geom::polystar(&Star {
                 center: position.evaluate(t),
                 points: points.evaluate(t),
                 rotation: rotation.evaluate(t),
@@ -527,33 +596,103 @@ pub fn collect(items: &[Shape], t: f32) -> Vec<Bez> {
                 inner_roundness: inner_roundness.evaluate(t),
                 star: *star,
                 reverse: *reverse,
-            })),
+            })]),
             Shape::Group { items, transform } => {
-                let gm = transform.matrix(t);
-                out.extend(collect(items, t).iter().map(|b| b.transformed(&gm)));
+                if depth > 64 {
+                    continue;
+                }
+                Item::Group { items: evaluate(items, t, depth + 1), matrix: transform.matrix(t), opacity: transform.opacity(t) }
             }
             Shape::Trim { start, end, offset, sequential } => {
                 let (s, e, o) = (start.evaluate(t) / 100.0, end.evaluate(t) / 100.0, offset.evaluate(t) / 360.0);
-                if s.is_finite() && e.is_finite() {
-                    out = geom::trim(&out, s, e, o, *sequential);
+                if !(s.is_finite() && e.is_finite()) {
+                    continue;
                 }
+                Item::Trim(s, e, if o.is_finite() { o } else { 0.0 }, *sequential)
             }
-            Shape::Round(r) => {
-                let r = r.evaluate(t);
-                out = out.iter().map(|b| geom::round_corners(b, r)).collect();
-            }
-            Shape::Merge(_) => {}
-            Shape::Repeater { copies, offset, transform, .. } => {
+            Shape::Round(r) => Item::Round(r.evaluate(t)),
+            Shape::Repeater { copies, offset, transform, start_opacity, end_opacity, above } => {
                 let n = copies.evaluate(t).clamp(0.0, super::model::MAX_COPIES);
                 let n = if n.is_finite() { n.ceil() as usize } else { 0 };
                 let off = offset.evaluate(t);
-                let base = std::mem::take(&mut out);
-                for c in 0..n {
-                    let rm = repeater_matrix(transform, t, c as f32 + off);
-                    out.extend(base.iter().map(|b| b.transformed(&rm)));
+                Item::Repeater {
+                    copies: (0..n).map(|c| repeater_matrix(transform, t, c as f32 + off)).collect(),
+                    start_opacity: start_opacity.evaluate(t) / 100.0,
+                    end_opacity: end_opacity.evaluate(t) / 100.0,
+                    above: *above,
                 }
             }
-            Shape::Fill { .. } | Shape::Stroke { .. } => {}
+            other => Item::Other(other),
+        });
+    }
+    out
+}
+
+fn geometry_mut<'a, 'b>(items: &'a mut [Item<'b>], out: &mut Vec<&'a mut Vec<Bez>>) {
+    for item in items {
+        match item {
+            Item::Geometry(g) => out.push(g),
+            Item::Group { items, .. } => geometry_mut(items, out),
+            _ => {}
+        }
+    }
+}
+
+/// Applies every modifier (trim, rounded corners) to the geometry above it in its group,
+/// nested groups included, in list order.
+pub fn apply_modifiers(items: &mut [Item]) {
+    for k in 0..items.len() {
+        if let Item::Group { items: inner, .. } = &mut items[k] {
+            apply_modifiers(inner);
+        }
+        let (before, rest) = items.split_at_mut(k);
+        match &rest[0] {
+            Item::Trim(s, e, o, sequential) => {
+                let (s, e, o, sequential) = (*s, *e, *o, *sequential);
+                let mut geo = Vec::new();
+                geometry_mut(before, &mut geo);
+                if sequential {
+                    let all: Vec<Bez> = geo.iter().flat_map(|g| g.iter().cloned()).collect();
+                    let counts: Vec<usize> = geo.iter().map(|g| g.len()).collect();
+                    let trimmed = geom::trim_sequential_per_path(&all, s, e, o);
+                    let mut it = trimmed.into_iter();
+                    for (g, n) in geo.iter_mut().zip(counts) {
+                        **g = it.by_ref().take(n).flatten().collect();
+                    }
+                } else {
+                    for g in geo {
+                        *g = geom::trim(g, s, e, o, false);
+                    }
+                }
+            }
+            Item::Round(r) => {
+                let r = *r;
+                let mut geo = Vec::new();
+                geometry_mut(before, &mut geo);
+                for g in geo {
+                    *g = g.iter().map(|b| geom::round_corners(b, r)).collect();
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+/// The paths of the items (geometry and nested groups, transformed into the items' space),
+/// repeated by any repeater among them.
+pub fn collect(items: &[Item]) -> Vec<Bez> {
+    let mut out: Vec<Bez> = Vec::new();
+    for item in items {
+        match item {
+            Item::Geometry(g) => out.extend(g.iter().cloned()),
+            Item::Group { items, matrix, .. } => out.extend(collect(items).iter().map(|b| b.transformed(matrix))),
+            Item::Repeater { copies, .. } => {
+                let base = std::mem::take(&mut out);
+                for m in copies {
+                    out.extend(base.iter().map(|b| b.transformed(m)));
+                }
+            }
+            _ => {}
         }
     }
     out
