@@ -75,6 +75,12 @@ impl Bez {
     pub fn segment(&self, k: usize) -> Cubic {
         let n = self.v.len();
         let (a, b) = (k % n, (k + 1) % n);
+        if self.o[a] == Vec2::ZERO && self.i[b] == Vec2::ZERO {
+            // A straight segment, parametrized uniformly (control points at the thirds) so
+            // that arc length and parameter agree when trimming.
+            let d = (self.v[b] - self.v[a]) / 3.0;
+            return [self.v[a], self.v[a] + d, self.v[b] - d, self.v[b]];
+        }
         [self.v[a], self.v[a] + self.o[a], self.v[b] + self.i[b], self.v[b]]
     }
 
@@ -136,7 +142,10 @@ impl Bez {
         for k in 0..self.segment_count() {
             let [_, c1, c2, p] = self.segment(k);
             let n = self.v.len();
-            if self.o[k % n] == Vec2::ZERO && self.i[(k + 1) % n] == Vec2::ZERO {
+            let third = (p - self.v[k % n]) / 3.0;
+            if self.o[k % n] == Vec2::ZERO && self.i[(k + 1) % n] == Vec2::ZERO
+                || (self.o[k % n] - third).length_squared() < 1e-10 && (self.i[(k + 1) % n] + third).length_squared() < 1e-10
+            {
                 pb.line_to(p.x, p.y);
             } else {
                 pb.cubic_to(c1.x, c1.y, c2.x, c2.y, p.x, p.y);
@@ -294,7 +303,8 @@ const LEN_STEPS: usize = 16;
 /// Cumulative chord lengths at `LEN_STEPS` parameter steps of a cubic.
 fn length_table(c: &Cubic) -> [f32; LEN_STEPS + 1] {
     let mut t = [0f32; LEN_STEPS + 1];
-    if c[1] == c[0] && c[2] == c[3] {
+    let third = (c[3] - c[0]) / 3.0;
+    if (c[1] - c[0] - third).length_squared() < 1e-12 && (c[3] - c[2] - third).length_squared() < 1e-12 {
         let l = (c[3] - c[0]).length();
         for (j, x) in t.iter_mut().enumerate() {
             *x = l * j as f32 / LEN_STEPS as f32;

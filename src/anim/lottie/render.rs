@@ -340,7 +340,8 @@ impl Ctx<'_> {
                     let n = copies.len();
                     let order: Vec<usize> = if *above { (0..n).collect() } else { (0..n).rev().collect() };
                     for c in order {
-                        let f = if n > 1 { c as f32 / (n - 1) as f32 } else { 0.0 };
+                        // Copy c fades by (c + 1) / n, as ThorVG draws it.
+                        let f = (c + 1) as f32 / n as f32;
                         let o = (start_opacity + (end_opacity - start_opacity) * f).clamp(0.0, 1.0);
                         self.draw_tree(&items[..k], t, m * copies[c], alpha * o, pass, clip, target);
                     }
@@ -389,32 +390,7 @@ impl Ctx<'_> {
         }
         let Some(ts) = to_ts(&m) else { return };
         let Some(p) = make_paint(paint, opacity, t) else { return };
-        let Some(path) = geom::to_skia_path(paths) else {
-            // Zero-length paths: round and square caps still draw a dot (as browsers do).
-            if style.cap == tiny_skia::LineCap::Butt {
-                return;
-            }
-            let mut pb = tiny_skia::PathBuilder::new();
-            for b in paths.iter().filter(|b| !b.v.is_empty() && b.v.iter().all(|v| *v == b.v[0])) {
-                let c = b.v[0];
-                if !c.is_finite() {
-                    continue;
-                }
-                let r = width / 2.0;
-                match style.cap {
-                    tiny_skia::LineCap::Round => pb.push_circle(c.x, c.y, r),
-                    _ => {
-                        if let Some(rect) = tiny_skia::Rect::from_xywh(c.x - r, c.y - r, width, width) {
-                            pb.push_rect(rect)
-                        }
-                    }
-                }
-            }
-            if let Some(dots) = pb.finish() {
-                target.fill_path(&dots, &p, FillRule::Winding, ts, clip);
-            }
-            return;
-        };
+        let Some(path) = geom::to_skia_path(paths) else { return };
         let mut stroke = tiny_skia::Stroke {
             width,
             miter_limit: style.miter,
