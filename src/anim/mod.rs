@@ -8,6 +8,7 @@
 
 pub mod lottie;
 mod masks;
+pub mod svg;
 
 use crate::error::{Error, Result};
 use crate::img::{Plane, Rgba};
@@ -233,6 +234,37 @@ impl Animation {
     }
 }
 
+/// Area-weighted color histogram (5 bits per channel) for a region's dominant color.
+#[derive(Clone, Debug, Default)]
+pub struct ColorHistogram {
+    bins: std::collections::HashMap<u16, (f64, [f64; 3])>,
+}
+
+impl ColorHistogram {
+    /// Adds every pixel of a flat rendering, weighted by its alpha.
+    pub fn add(&mut self, fill: &Plane<Rgba>) {
+        for c in fill.data() {
+            if !(c[3] > 0.0) {
+                continue;
+            }
+            let q = |v: f32| ((v.clamp(0.0, 1.0) * 31.0).round() as u16) & 31;
+            let e = self.bins.entry(q(c[0]) << 10 | q(c[1]) << 5 | q(c[2])).or_insert((0.0, [0.0; 3]));
+            let a = c[3] as f64;
+            e.0 += a;
+            for k in 0..3 {
+                e.1[k] += c[k] as f64 * a;
+            }
+        }
+    }
+
+    /// The mean color of the heaviest bin (ties broken by the lower bin), opaque; `None` when
+    /// nothing was covered.
+    pub fn dominant(&self) -> Option<Rgba> {
+        let (_, (w, sum)) = self.bins.iter().max_by(|a, b| a.1.0.total_cmp(&b.1.0).then(b.0.cmp(a.0)))?;
+        Some([(sum[0] / w) as f32, (sum[1] / w) as f32, (sum[2] / w) as f32, 1.0])
+    }
+}
+
 /// Loads an animation: a `.json` Lottie file, a directory or glob of SVG files, or a
 /// directory of PNG masks (one region).
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Animation> {
@@ -242,9 +274,8 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Animation> {
     let is_dir = path.is_dir();
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
     if is_dir || crate::seq::is_glob(path) {
-        let svgs = crate::seq::list_sequence(path, &["svg"]);
-        if svgs.is_ok() {
-            return Err(Error::animation(path, "SVG frame sequences are not supported yet"));
+        if crate::seq::list_sequence(path, &["svg"]).is_ok() {
+            return svg::load(path, options);
         }
         return masks::load(path, options);
     }

@@ -144,7 +144,8 @@ impl Bez {
             let n = self.v.len();
             let third = (p - self.v[k % n]) / 3.0;
             if self.o[k % n] == Vec2::ZERO && self.i[(k + 1) % n] == Vec2::ZERO
-                || (self.o[k % n] - third).length_squared() < 1e-10 && (self.i[(k + 1) % n] + third).length_squared() < 1e-10
+                || (self.o[k % n] - third).length_squared() < 1e-10
+                    && (self.i[(k + 1) % n] + third).length_squared() < 1e-10
             {
                 pb.line_to(p.x, p.y);
             } else {
@@ -199,26 +200,8 @@ pub fn rect(p: Vec2, s: Vec2, r: f32, reverse: bool) -> Bez {
             Vec2::new(rt - r, t),
         ];
         let z = Vec2::ZERO;
-        let i = vec![
-            Vec2::new(0.0, -k),
-            z,
-            Vec2::new(k, 0.0),
-            z,
-            Vec2::new(0.0, k),
-            z,
-            Vec2::new(-k, 0.0),
-            z,
-        ];
-        let o = vec![
-            z,
-            Vec2::new(0.0, k),
-            z,
-            Vec2::new(-k, 0.0),
-            z,
-            Vec2::new(0.0, -k),
-            z,
-            Vec2::new(k, 0.0),
-        ];
+        let i = vec![Vec2::new(0.0, -k), z, Vec2::new(k, 0.0), z, Vec2::new(0.0, k), z, Vec2::new(-k, 0.0), z];
+        let o = vec![z, Vec2::new(0.0, k), z, Vec2::new(-k, 0.0), z, Vec2::new(0.0, -k), z, Vec2::new(k, 0.0)];
         Bez { closed: true, v, i, o }
     };
     if reverse { bez.reversed() } else { bez }

@@ -27,7 +27,9 @@ pub mod render;
 pub mod schema;
 pub mod value;
 
-use super::{Animation, Background, LoadOptions, MAX_FRAMES, MAX_SIDE, Region, RegionFrame, RegionKind, RegionRenderer};
+use super::{
+    Animation, Background, LoadOptions, MAX_FRAMES, MAX_SIDE, Region, RegionFrame, RegionKind, RegionRenderer,
+};
 use crate::error::{Error, Result};
 use crate::img::{Plane, Rgba};
 use model::{Composition, Content, Model, Shape};
@@ -55,7 +57,9 @@ pub fn parse(path: &Path, text: &str) -> Result<Model> {
                 path,
                 format!("missing '{key}' ({what}); is this a Lottie file? Re-export it with Bodymovin"),
             )),
-            Some(x) if !x.is_finite() => Err(Error::animation(path, format!("'{key}' ({what}) is not a finite number"))),
+            Some(x) if !x.is_finite() => {
+                Err(Error::animation(path, format!("'{key}' ({what}) is not a finite number")))
+            }
             Some(x) => Ok(x),
         }
     };
@@ -76,7 +80,12 @@ pub fn parse(path: &Path, text: &str) -> Result<Model> {
         return Err(Error::animation(path, format!("frame rate 'fr' is {fr}; it must be positive")));
     }
     if fr > MAX_FPS {
-        return Err(Error::Limit { path: path.to_path_buf(), what: "frame rate 'fr'".into(), value: fr, limit: MAX_FPS });
+        return Err(Error::Limit {
+            path: path.to_path_buf(),
+            what: "frame rate 'fr'".into(),
+            value: fr,
+            limit: MAX_FPS,
+        });
     }
     if ip.abs() > 1e9 || op.abs() > 1e9 {
         return Err(Error::animation(path, format!("'ip' {ip} / 'op' {op} are absurd frame numbers")));
@@ -124,7 +133,8 @@ fn layer_has_strokes(model: &Model, comp: &Composition, li: usize, depth: usize)
         Content::Shapes(items) => has_strokes(model, items),
         Content::Precomp { comp: c, .. } => {
             let inner = &model.comps[*c];
-            (0..inner.layers.len()).any(|i| !inner.layers[i].is_matte_source && layer_has_strokes(model, inner, i, depth + 1))
+            (0..inner.layers.len())
+                .any(|i| !inner.layers[i].is_matte_source && layer_has_strokes(model, inner, i, depth + 1))
         }
         _ => false,
     }
@@ -151,9 +161,10 @@ fn collect_warnings(model: &Model, comp: &Composition, li: usize, out: &mut Vec<
     }
 }
 
-/// True when the layer draws nothing by its nature (null, unsupported types).
+/// True when the layer draws nothing by its nature (null, unsupported types) or is fully
+/// transparent at every frame (a helper layer, often a parent).
 fn draws_nothing(l: &model::Layer) -> bool {
-    matches!(l.content, Content::Nothing)
+    matches!(l.content, Content::Nothing) || matches!(l.transform.opacity, value::Value::Fixed(o) if !(o > 0.0))
 }
 
 /// Whether a root layer is a full-canvas solid, opaque and unmasked, visible throughout.
@@ -274,31 +285,24 @@ fn dominant_color(model: &Model, target: Target, visible: &std::ops::Range<usize
     let side = model.width.max(model.height);
     let scale = (96.0 / side).min(1.0);
     let (w, h) = (((model.width * scale).round() as u32).max(1), ((model.height * scale).round() as u32).max(1));
-    let mut hist: std::collections::HashMap<u32, (f64, [f64; 3])> = std::collections::HashMap::new();
+    let mut hist = super::ColorHistogram::default();
     let n = visible.len();
     if n == 0 {
         return None;
     }
     let samples = 5.min(n);
-    for s in 0..samples {
-        let f = visible.start + s * n / samples;
-        let pm = render::render(model, target, model.ip + f as f32, w, h, scale, Pass::Fills);
-        for c in to_plane(&pm).data() {
-            if c[3] <= 0.0 {
-                continue;
-            }
-            let q = |v: f32| ((v.clamp(0.0, 1.0) * 31.0).round() as u32) & 31;
-            let key = q(c[0]) << 10 | q(c[1]) << 5 | q(c[2]);
-            let e = hist.entry(key).or_insert((0.0, [0.0; 3]));
-            let a = c[3] as f64;
-            e.0 += a;
-            for k in 0..3 {
-                e.1[k] += c[k] as f64 * a;
-            }
+    // Fills decide; a region that only strokes takes its stroke color.
+    for pass in [Pass::Fills, Pass::Strokes] {
+        for s in 0..samples {
+            let f = visible.start + s * n / samples;
+            let pm = render::render(model, target, model.ip + f as f32, w, h, scale, pass);
+            hist.add(&to_plane(&pm));
+        }
+        if let Some(c) = hist.dominant() {
+            return Some(c);
         }
     }
-    let (_, (wt, sum)) = hist.into_iter().max_by(|a, b| a.1.0.total_cmp(&b.1.0).then(b.0.cmp(&a.0)))?;
-    Some([(sum[0] / wt) as f32, (sum[1] / wt) as f32, (sum[2] / wt) as f32, 1.0])
+    None
 }
 
 /// Loads a Lottie file.
@@ -323,7 +327,7 @@ pub fn from_model(path: &Path, model: Model, options: &LoadOptions) -> Result<An
     let mut bg_layers = Vec::new();
     for li in (0..root.layers.len()).rev() {
         let l = &root.layers[li];
-        if l.hidden || draws_nothing(l) && matches!(l.ty, 3) {
+        if l.hidden || draws_nothing(l) {
             continue;
         }
         match is_background(&model, li) {
@@ -389,8 +393,9 @@ pub fn from_model(path: &Path, model: Model, options: &LoadOptions) -> Result<An
     if specs.is_empty() {
         return Err(Error::Empty {
             path: path.to_path_buf(),
-            what: "no layer draws anything that could be stylized (only nulls, mattes, background or unsupported layers)"
-                .into(),
+            what:
+                "no layer draws anything that could be stylized (only nulls, mattes, background or unsupported layers)"
+                    .into(),
         });
     }
     let mut regions = Vec::with_capacity(specs.len());
@@ -428,5 +433,15 @@ pub fn from_model(path: &Path, model: Model, options: &LoadOptions) -> Result<An
     }
     let fps = model.fps as f64;
     let renderer = LottieRenderer { model: Arc::new(model), targets, strokes, width, height, scale: options.scale };
-    Ok(Animation::new(path.to_path_buf(), width, height, fps, frames, regions, background, warnings, Box::new(renderer)))
+    Ok(Animation::new(
+        path.to_path_buf(),
+        width,
+        height,
+        fps,
+        frames,
+        regions,
+        background,
+        warnings,
+        Box::new(renderer),
+    ))
 }

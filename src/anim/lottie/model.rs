@@ -105,7 +105,8 @@ impl Transform {
         let Some(t) = t else { return Transform::default() };
         let position = match &t.p {
             Some(p) if p.s.as_ref().is_some_and(|s| s.as_bool() == Some(true) || s.as_f64() == Some(1.0)) => {
-                let sub = |v: &Option<Json>| v.as_ref().and_then(|v| serde_json::from_value::<schema::Prop>(v.clone()).ok());
+                let sub =
+                    |v: &Option<Json>| v.as_ref().and_then(|v| serde_json::from_value::<schema::Prop>(v.clone()).ok());
                 let (x, y) = (sub(&p.x), sub(&p.y));
                 Position::Split(prop(x.as_ref(), 0.0, "position x", w), prop(y.as_ref(), 0.0, "position y", w))
             }
@@ -296,11 +297,7 @@ pub enum Shape {
     },
 }
 
-fn style_props(
-    s: &schema::Style,
-    ty: &str,
-    w: &mut Warn,
-) -> (Paint, Value<f32>) {
+fn style_props(s: &schema::Style, ty: &str, w: &mut Warn) -> (Paint, Value<f32>) {
     let opacity = prop(s.o.as_ref(), 100.0, "opacity", w);
     let paint = if ty == "gf" || ty == "gs" {
         let g = s.g.clone().unwrap_or_default();

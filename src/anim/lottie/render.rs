@@ -214,7 +214,8 @@ impl Ctx<'_> {
         if !(w.is_finite() && h.is_finite()) {
             return None;
         }
-        let corners = [Vec2::ZERO, Vec2::new(w, 0.0), Vec2::new(w, h), Vec2::new(0.0, h)].map(|p| m.transform_point2(p));
+        let corners =
+            [Vec2::ZERO, Vec2::new(w, 0.0), Vec2::new(w, h), Vec2::new(0.0, h)].map(|p| m.transform_point2(p));
         let axis_aligned = m.matrix2.x_axis.y.abs() < 1e-6 && m.matrix2.y_axis.x.abs() < 1e-6;
         if axis_aligned {
             let (minx, maxx) = corners.iter().fold((f32::MAX, f32::MIN), |a, p| (a.0.min(p.x), a.1.max(p.x)));
@@ -244,7 +245,8 @@ impl Ctx<'_> {
     fn layer_mask(&self, layer: &Layer, lt: f32, m: Affine2) -> Option<Mask> {
         let masks: Vec<_> = layer.masks.iter().filter(|k| k.mode != MaskMode::None).collect();
         let n = (self.width * self.height) as usize;
-        let first_full = matches!(masks.first().map(|k| k.mode), Some(MaskMode::Subtract | MaskMode::Intersect | MaskMode::Darken));
+        let first_full =
+            matches!(masks.first().map(|k| k.mode), Some(MaskMode::Subtract | MaskMode::Intersect | MaskMode::Darken));
         let mut acc = vec![if first_full { 1.0f32 } else { 0.0 }; n];
         let ts = to_ts(&m)?;
         for mk in masks {
@@ -391,6 +393,9 @@ impl Ctx<'_> {
         let Some(ts) = to_ts(&m) else { return };
         let Some(p) = make_paint(paint, opacity, t) else { return };
         let Some(path) = geom::to_skia_path(paths) else { return };
+        if path.bounds().width() <= 0.0 && path.bounds().height() <= 0.0 {
+            return; // zero-length: ThorVG draws no cap dot either
+        }
         let mut stroke = tiny_skia::Stroke {
             width,
             miter_limit: style.miter,
@@ -426,7 +431,8 @@ fn rgba(c: &[f32; 4], opacity: f32) -> tiny_skia::Color {
 pub fn gradient_stops(g: &Gradient, t: f32) -> Vec<(f32, [f32; 4])> {
     let raw = g.stops.evaluate(t);
     let n = g.count.min(raw.len() / 4);
-    let colors: Vec<(f32, [f32; 3])> = (0..n).map(|k| (raw[4 * k], [raw[4 * k + 1], raw[4 * k + 2], raw[4 * k + 3]])).collect();
+    let colors: Vec<(f32, [f32; 3])> =
+        (0..n).map(|k| (raw[4 * k], [raw[4 * k + 1], raw[4 * k + 2], raw[4 * k + 3]])).collect();
     let alphas: Vec<(f32, f32)> = raw[4 * n..].chunks_exact(2).map(|c| (c[0], c[1])).collect();
     let interp = |list: &[(f32, f32)], x: f32| -> f32 {
         match list.iter().position(|s| s.0 >= x) {
@@ -505,7 +511,10 @@ fn repeater_matrix(tr: &super::model::Transform, t: f32, i: f32) -> Affine2 {
     let s = tr.scale.evaluate(t) / 100.0;
     let r = tr.rotation.evaluate(t).to_radians();
     let sp = Vec2::new(s.x.abs().powf(i) * s.x.signum(), s.y.abs().powf(i) * s.y.signum());
-    Affine2::from_translation(p * i + a) * Affine2::from_angle(r * i) * Affine2::from_scale(sp) * Affine2::from_translation(-a)
+    Affine2::from_translation(p * i + a)
+        * Affine2::from_angle(r * i)
+        * Affine2::from_scale(sp)
+        * Affine2::from_translation(-a)
 }
 
 /// A shape item evaluated at one time: geometry as paths, groups with their matrix.
@@ -546,9 +555,12 @@ pub fn evaluate(items: &[Shape], t: f32, depth: usize) -> Vec<Item<'_>> {
     for item in items {
         out.push(match item {
             Shape::Path(v) => Item::Geometry(vec![v.evaluate(t)]),
-            Shape::Rect { position, size, roundness, reverse } => {
-                Item::Geometry(vec![geom::rect(position.evaluate(t), size.evaluate(t), roundness.evaluate(t), *reverse)])
-            }
+            Shape::Rect { position, size, roundness, reverse } => Item::Geometry(vec![geom::rect(
+                position.evaluate(t),
+                size.evaluate(t),
+                roundness.evaluate(t),
+                *reverse,
+            )]),
             Shape::Ellipse { position, size, reverse } => {
                 Item::Geometry(vec![geom::ellipse(position.evaluate(t), size.evaluate(t), *reverse)])
             }
@@ -577,7 +589,11 @@ pub fn evaluate(items: &[Shape], t: f32, depth: usize) -> Vec<Item<'_>> {
                 if depth > 64 {
                     continue;
                 }
-                Item::Group { items: evaluate(items, t, depth + 1), matrix: transform.matrix(t), opacity: transform.opacity(t) }
+                Item::Group {
+                    items: evaluate(items, t, depth + 1),
+                    matrix: transform.matrix(t),
+                    opacity: transform.opacity(t),
+                }
             }
             Shape::Trim { start, end, offset, sequential } => {
                 let (s, e, o) = (start.evaluate(t) / 100.0, end.evaluate(t) / 100.0, offset.evaluate(t) / 360.0);

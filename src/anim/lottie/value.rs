@@ -308,9 +308,8 @@ fn eases(o: Option<&Json>, i: Option<&Json>) -> Vec<Ease> {
     let (ox, oy, ix, iy) =
         (handle_component(o, "x"), handle_component(o, "y"), handle_component(i, "x"), handle_component(i, "y"));
     let n = ox.len().max(oy.len()).max(ix.len()).max(iy.len()).max(1);
-    let at = |v: &[f32], d: usize, default: f32| {
-        v.get(d).or(v.last()).copied().filter(|x| x.is_finite()).unwrap_or(default)
-    };
+    let at =
+        |v: &[f32], d: usize, default: f32| v.get(d).or(v.last()).copied().filter(|x| x.is_finite()).unwrap_or(default);
     (0..n)
         .map(|d| Ease {
             out: Vec2::new(at(&ox, d, 0.0), at(&oy, d, 0.0)),
