@@ -46,6 +46,27 @@ fn to_ts(m: &Affine2) -> Option<tiny_skia::Transform> {
     Some(tiny_skia::Transform::from_row(c[0], c[1], c[2], c[3], c[4], c[5]))
 }
 
+/// Largest device-space coordinate drawn. tiny-skia works in fixed point and can fail on
+/// paths far outside the canvas (found by fuzzing); such paths are skipped.
+const MAX_DEVICE_COORD: f32 = 1_000_000.0;
+
+/// True when `path` under `ts`, widened by `pad` local units, stays within safe coordinates.
+fn drawable(path: &tiny_skia::Path, ts: tiny_skia::Transform, pad: f32) -> bool {
+    let b = path.bounds();
+    let pad = if pad.is_finite() { pad.max(0.0) } else { return false };
+    let corners = [
+        (b.left() - pad, b.top() - pad),
+        (b.right() + pad, b.top() - pad),
+        (b.left() - pad, b.bottom() + pad),
+        (b.right() + pad, b.bottom() + pad),
+    ];
+    corners.iter().all(|&(x, y)| {
+        let dx = ts.sx * x + ts.kx * y + ts.tx;
+        let dy = ts.ky * x + ts.sy * y + ts.ty;
+        dx.is_finite() && dy.is_finite() && dx.abs() < MAX_DEVICE_COORD && dy.abs() < MAX_DEVICE_COORD
+    })
+}
+
 struct Ctx<'a> {
     model: &'a Model,
     width: u32,
@@ -180,6 +201,9 @@ impl Ctx<'_> {
                 paint.anti_alias = true;
                 paint.set_color(rgba(color, opacity));
                 let path = tiny_skia::PathBuilder::from_rect(rect);
+                if !drawable(&path, ts, 0.0) {
+                    return;
+                }
                 target.fill_path(&path, &paint, FillRule::Winding, ts, clip);
             }
             Content::Precomp { comp, width, height } => {
@@ -231,6 +255,9 @@ impl Ctx<'_> {
         }
         pb.close();
         let Some(path) = pb.finish() else { return Some(None) };
+        if !drawable(&path, tiny_skia::Transform::identity(), 0.0) {
+            return None;
+        }
         let mut mask = Mask::new(self.width, self.height)?;
         mask.fill_path(&path, FillRule::Winding, true, tiny_skia::Transform::identity());
         if let Some(c) = clip {
@@ -255,7 +282,9 @@ impl Ctx<'_> {
             let opacity = if opacity.is_finite() { opacity } else { 0.0 };
             let x = mk.expansion.evaluate(lt);
             let mut pm = self.new_pixmap()?;
-            if let Some(path) = geom::to_skia_path(std::slice::from_ref(&bez)) {
+            if let Some(path) = geom::to_skia_path(std::slice::from_ref(&bez))
+                && drawable(&path, ts, x.abs())
+            {
                 let mut paint = tiny_skia::Paint::default();
                 paint.anti_alias = true;
                 paint.set_color(tiny_skia::Color::WHITE);
@@ -370,6 +399,9 @@ impl Ctx<'_> {
             return;
         }
         let (Some(path), Some(ts)) = (geom::to_skia_path(paths), to_ts(&m)) else { return };
+        if !drawable(&path, ts, 0.0) {
+            return;
+        }
         let Some(p) = make_paint(paint, opacity, t) else { return };
         target.fill_path(&path, &p, rule, ts, clip);
     }
@@ -393,6 +425,9 @@ impl Ctx<'_> {
         let Some(ts) = to_ts(&m) else { return };
         let Some(p) = make_paint(paint, opacity, t) else { return };
         let Some(path) = geom::to_skia_path(paths) else { return };
+        if !drawable(&path, ts, width * style.miter.max(1.0)) {
+            return;
+        }
         if path.bounds().width() <= 0.0 && path.bounds().height() <= 0.0 {
             return; // zero-length: ThorVG draws no cap dot either
         }
