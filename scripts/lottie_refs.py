@@ -14,6 +14,7 @@ are 0 and 1/4, 1/2, 3/4 of the way through (rounded down), deduplicated. A manif
 `refs/<case>/index.tsv` lists layer index, layer name, frame and file.
 
 Usage:  pip install thorvg-python pillow && python3 scripts/lottie_refs.py [CASE ...]
+        LOTTIE_FIXTURES=fixtures/demo python3 scripts/lottie_refs.py   (the demo)
 """
 
 import json
@@ -23,7 +24,8 @@ import sys
 import thorvg_python as tvg
 from PIL import Image
 
-ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "fixtures", "lottie")
+ROOT = os.environ.get("LOTTIE_FIXTURES") or os.path.join(
+    os.path.dirname(os.path.abspath(__file__)), "..", "fixtures", "lottie")
 
 
 def frames_of(doc):

@@ -24,8 +24,9 @@ const TINY_PIXELS: f64 = 16.0;
 /// Cases (or `case/L<layer>`) not held to [`MIN_IOU`], with the reason.
 const IGNORED: &[(&str, &str)] = &[];
 
-fn fixtures() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/lottie")
+fn fixture_dirs() -> Vec<PathBuf> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    vec![root.join("fixtures/lottie"), root.join("fixtures/demo")]
 }
 
 fn load_gray(path: &Path) -> (u32, u32, Vec<u8>) {
@@ -89,10 +90,9 @@ fn ignored(case: &str, layer: usize) -> Option<&'static str> {
 
 #[test]
 fn lottie_conformance_against_thorvg() {
-    let dir = fixtures();
-    let mut cases: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .unwrap()
-        .filter_map(|e| e.ok().map(|e| e.path()))
+    let mut cases: Vec<PathBuf> = fixture_dirs()
+        .iter()
+        .flat_map(|dir| std::fs::read_dir(dir).unwrap().filter_map(|e| e.ok().map(|e| e.path())))
         .filter(|p| p.extension().is_some_and(|x| x == "json"))
         .collect();
     cases.sort();
@@ -102,6 +102,7 @@ fn lottie_conformance_against_thorvg() {
     let mut compared = 0;
     for case_path in &cases {
         let case = case_path.file_stem().unwrap().to_string_lossy().into_owned();
+        let dir = case_path.parent().unwrap();
         let index = dir.join("refs").join(&case).join("index.tsv");
         let Ok(index) = std::fs::read_to_string(&index) else { continue };
         let text = std::fs::read_to_string(case_path).unwrap();
