@@ -4,7 +4,8 @@
 //! **Layers.** Each top-level `<g>` of the root `<svg>` is a layer, named by its
 //! `inkscape:label` when it has one (Inkscape also gives every layer an automatic `id` such as
 //! `layer1`, so the label is the name the designer chose), else by its `id`, else
-//! `layer N` (N = its position among the top-level groups, from 1). Top-level shapes outside
+//! `layer N` (N = its position among the top-level groups that have neither, from 1, so that
+//! named groups coming and going do not renumber it). Top-level shapes outside
 //! any group (`path`, `rect`, `circle`, `text`, `use`, …) are gathered into **one** region
 //! named `root`, drawn in document order, because a stray shape rarely deserves a layer of
 //! its own and frame-to-frame identity of unnamed shapes is not knowable. `defs`, `style`,
@@ -83,13 +84,15 @@ fn top_level(path: &Path, text: &str) -> Result<(Vec<TopLevel>, bool)> {
     for child in root.children().filter(|c| c.is_element()) {
         let tag = child.tag_name().name();
         let name = if tag == "g" {
-            groups += 1;
-            child
+            let named = child
                 .attribute((INKSCAPE_NS, "label"))
                 .or_else(|| child.attribute("id"))
                 .map(str::to_string)
-                .filter(|s| !s.trim().is_empty())
-                .unwrap_or_else(|| format!("layer {groups}"))
+                .filter(|s| !s.trim().is_empty());
+            named.unwrap_or_else(|| {
+                groups += 1;
+                format!("layer {groups}")
+            })
         } else if is_shape(tag) {
             ROOT_LAYER.to_string()
         } else {
