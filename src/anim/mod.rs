@@ -244,15 +244,15 @@ impl ColorHistogram {
     /// Adds every pixel of a flat rendering, weighted by its alpha.
     pub fn add(&mut self, fill: &Plane<Rgba>) {
         for c in fill.data() {
-            if !(c[3] > 0.0) {
+            if c[3].is_nan() || c[3] <= 0.0 {
                 continue;
             }
             let q = |v: f32| ((v.clamp(0.0, 1.0) * 31.0).round() as u16) & 31;
             let e = self.bins.entry(q(c[0]) << 10 | q(c[1]) << 5 | q(c[2])).or_insert((0.0, [0.0; 3]));
             let a = c[3] as f64;
             e.0 += a;
-            for k in 0..3 {
-                e.1[k] += c[k] as f64 * a;
+            for (acc, &v) in e.1.iter_mut().zip(c) {
+                *acc += v as f64 * a;
             }
         }
     }

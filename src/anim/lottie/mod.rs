@@ -76,7 +76,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Model> {
             return Err(Error::Limit { path: path.to_path_buf(), what: what.into(), value: v, limit: MAX_SIDE as f64 });
         }
     }
-    if !(fr > 0.0) {
+    if fr <= 0.0 {
         return Err(Error::animation(path, format!("frame rate 'fr' is {fr}; it must be positive")));
     }
     if fr > MAX_FPS {
@@ -90,7 +90,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Model> {
     if ip.abs() > 1e9 || op.abs() > 1e9 {
         return Err(Error::animation(path, format!("'ip' {ip} / 'op' {op} are absurd frame numbers")));
     }
-    if !(op > ip) {
+    if op <= ip {
         return Err(Error::animation(
             path,
             format!("end frame 'op' ({op}) is not after the first frame 'ip' ({ip}); the animation has no frames"),
@@ -164,7 +164,8 @@ fn collect_warnings(model: &Model, comp: &Composition, li: usize, out: &mut Vec<
 /// True when the layer draws nothing by its nature (null, unsupported types) or is fully
 /// transparent at every frame (a helper layer, often a parent).
 fn draws_nothing(l: &model::Layer) -> bool {
-    matches!(l.content, Content::Nothing) || matches!(l.transform.opacity, value::Value::Fixed(o) if !(o > 0.0))
+    matches!(l.content, Content::Nothing)
+        || matches!(l.transform.opacity, value::Value::Fixed(o) if o.is_nan() || o <= 0.0)
 }
 
 /// Whether a root layer is a full-canvas solid, opaque and unmasked, visible throughout.

@@ -197,8 +197,7 @@ impl Ctx<'_> {
                 }
                 let Some(rect) = tiny_skia::Rect::from_xywh(0.0, 0.0, *width, *height) else { return };
                 let Some(ts) = to_ts(&m) else { return };
-                let mut paint = tiny_skia::Paint::default();
-                paint.anti_alias = true;
+                let mut paint = tiny_skia::Paint { anti_alias: true, ..Default::default() };
                 paint.set_color(rgba(color, opacity));
                 let path = tiny_skia::PathBuilder::from_rect(rect);
                 if !drawable(&path, ts, 0.0) {
@@ -285,8 +284,7 @@ impl Ctx<'_> {
             if let Some(path) = geom::to_skia_path(std::slice::from_ref(&bez))
                 && drawable(&path, ts, x.abs())
             {
-                let mut paint = tiny_skia::Paint::default();
-                paint.anti_alias = true;
+                let mut paint = tiny_skia::Paint { anti_alias: true, ..Default::default() };
                 paint.set_color(tiny_skia::Color::WHITE);
                 pm.fill_path(&path, &paint, FillRule::Winding, ts, None);
                 if x.is_finite() && x.abs() > 0.0 {
@@ -351,10 +349,8 @@ impl Ctx<'_> {
     ) {
         for k in (0..items.len()).rev() {
             match &items[k] {
-                Item::Group { items: inner, matrix, opacity } => {
-                    if *opacity > 0.0 {
-                        self.draw_tree(inner, t, m * *matrix, alpha * opacity, pass, clip, target);
-                    }
+                Item::Group { items: inner, matrix, opacity } if *opacity > 0.0 => {
+                    self.draw_tree(inner, t, m * *matrix, alpha * opacity, pass, clip, target);
                 }
                 Item::Other(Shape::Fill { paint, opacity, even_odd }) if pass.fills() => {
                     let paths = collect(&items[..k]);
@@ -419,7 +415,7 @@ impl Ctx<'_> {
         target: &mut Pixmap,
     ) {
         let width = style.width.evaluate(t);
-        if opacity <= 0.0 || !opacity.is_finite() || !(width > 0.0) || !width.is_finite() {
+        if opacity <= 0.0 || !opacity.is_finite() || !width.is_finite() || width <= 0.0 {
             return;
         }
         let Some(ts) = to_ts(&m) else { return };

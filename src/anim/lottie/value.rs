@@ -283,7 +283,7 @@ fn point_at_length(p0: Vec2, p1: Vec2, p2: Vec2, p3: Vec2, t: f32) -> Vec2 {
         lens[j] += lens[j - 1];
     }
     let total = lens[N];
-    if !(total > 1e-6) {
+    if total.is_nan() || total <= 1e-6 {
         return p0 + (p3 - p0) * t;
     }
     if t <= 0.0 {
