@@ -275,6 +275,10 @@ fn errors_name_the_problem() {
     assert!(msg(r#"{"w": 10, "h": 10, "fr": 30, "op": 5, "layers": []}"#).contains("no layers"));
     assert!(matches!(load_err("   "), Error::Empty { .. }));
     assert!(msg(r#"{"w": 1e999}"#).contains("line 1"));
+    assert!(matches!(load_err(r#"{"w": NaN, "h": 10}"#), Error::Json { line: 1, column: 7, .. }));
+    assert!(msg(r#"{"w": 1e300, "h": 10, "fr": 30, "op": 5, "layers": []}"#).contains("canvas width"));
+    assert!(msg(r#"{"w": 10, "h": 10, "fr": 1e300, "op": 5, "layers": []}"#).contains("frame rate"));
+    assert!(msg(r#"{"w": 10, "h": -3, "fr": 30, "op": 5, "layers": []}"#).contains("at least 1 pixel"));
     let missing = anim::load(Path::new("/nonexistent/x.json"), &LoadOptions::default()).unwrap_err();
     assert!(missing.to_string().contains("/nonexistent/x.json"));
 }

@@ -450,6 +450,12 @@ fn parse_shape(ty: &str, item: &Json, w: &mut Warn, depth: usize) -> Option<Shap
         "mm" => {
             let m: schema::Modifier = from(item, ty, w);
             let mode = m.m.filter(|x| (1.0..=5.0).contains(x)).unwrap_or(1.0) as u8;
+            if mode != 1 {
+                let name = ["", "merge", "add", "subtract", "intersect", "exclude"][mode as usize];
+                w.add(format!(
+                    "merge paths mode '{name}' is not supported; the paths are combined without a boolean operation"
+                ));
+            }
             Shape::Merge(mode)
         }
         "rp" => {
