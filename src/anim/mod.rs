@@ -5,6 +5,26 @@
 //! rendered on demand, frame by frame, into its *flat rendering* ([`RegionFrame`]): the fills
 //! in their own colors as straight RGBA, whose alpha is the region's antialiased coverage mask,
 //! with strokes kept apart so later stages can draw them crisp on top.
+//!
+//! Inputs:
+//! - a Lottie `.json` file ([`lottie`]): regions are the top-level layers (a precomp is one
+//!   region unless [`LoadOptions::split_precomps`]); nulls, matte sources, hidden and fully
+//!   transparent helper layers are not regions; the bottom full-canvas solids are the
+//!   [`Background`]. Frame 0 is the composition's `ip`.
+//! - a directory or `dir/*.svg` glob of SVG frames ([`svg`]): regions are the top-level
+//!   groups, identified across frames by name; shapes outside groups form one `root` region.
+//!   Played at 24 fps.
+//! - a directory of PNG masks: one region, 24 fps.
+//!
+//! ```no_run
+//! use fluidymation::anim::{self, LoadOptions};
+//! let a = anim::load("fixtures/demo/waving.json".as_ref(), &LoadOptions::default())?;
+//! for (i, r) in a.regions.iter().enumerate() {
+//!     let frame = a.render(i, r.visible.start)?;
+//!     println!("{} covers {} px", r.name, frame.coverage().threshold(0.5).count());
+//! }
+//! # Ok::<(), fluidymation::Error>(())
+//! ```
 
 pub mod lottie;
 mod masks;

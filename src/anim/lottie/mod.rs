@@ -231,25 +231,24 @@ pub struct LottieRenderer {
     scale: f32,
 }
 
-/// Converts a premultiplied pixmap into straight RGBA in `0..=1`.
-///
-/// The plane starts zeroed (which the allocator gives without touching memory) and only
-/// covered pixels are written, so mostly-empty frames of large canvases stay cheap.
+/// Converts a premultiplied pixmap into straight RGBA in `0..=1` (one sequential pass; at
+/// large sizes this conversion, not the rasterization, dominates the cost of a frame).
 pub fn to_plane(pm: &tiny_skia::Pixmap) -> Plane<Rgba> {
-    let (w, h) = (pm.width() as usize, pm.height() as usize);
-    let mut plane: Plane<Rgba> = Plane::new(w, h);
-    let out = plane.data_mut();
-    for (i, p) in pm.pixels().iter().enumerate() {
-        let a = p.alpha();
-        if a == 0 {
-            continue;
-        }
-        let af = a as f32 / 255.0;
-        let inv = 1.0 / (255.0 * af);
-        let c = |v: u8| (v as f32 * inv).min(1.0);
-        out[i] = [c(p.red()), c(p.green()), c(p.blue()), af];
-    }
-    plane
+    let data = pm
+        .pixels()
+        .iter()
+        .map(|p| {
+            let a = p.alpha();
+            if a == 0 {
+                return [0.0; 4];
+            }
+            let af = a as f32 / 255.0;
+            let inv = 1.0 / (255.0 * af);
+            let c = |v: u8| (v as f32 * inv).min(1.0);
+            [c(p.red()), c(p.green()), c(p.blue()), af]
+        })
+        .collect();
+    Plane::from_vec(pm.width() as usize, pm.height() as usize, data).unwrap_or_else(|| Plane::new(0, 0))
 }
 
 impl LottieRenderer {
