@@ -7,8 +7,9 @@
 //!
 //! - `region_frames`: through `Animation::render`, as the pipeline calls it (fills and, where a
 //!   region has them, strokes, each converted to a full-canvas straight-RGBA `f32` plane);
-//! - `pixmaps`: the rasterizer alone (`lottie::render::render`, fills and strokes in one
-//!   premultiplied 8-bit pixmap), which shows how much of the cost is the conversion.
+//! - `pixmaps`: the rasterizer alone (`lottie::render::render` of every root layer, regions
+//!   or not, fills and strokes in one premultiplied 8-bit pixmap), which shows how much of
+//!   the cost is the conversion.
 //!
 //! `cargo bench --bench rasterize`
 
