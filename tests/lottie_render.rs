@@ -295,3 +295,29 @@ fn unsupported_features_warn_with_layer_name() {
         assert!(w.iter().any(|x| x.contains(feature) && x.contains("'fancy'")), "{feature}: {w:?}");
     }
 }
+
+#[test]
+fn exponential_precomp_reuse_is_bounded() {
+    // Ten nested levels, each using the next one ten times: 10^10 draws if unbounded.
+    let mut assets = Vec::new();
+    for level in 0..10 {
+        let layers: Vec<Value> = if level == 9 {
+            vec![rect_layer("leaf", 1, 0.0, 0.0, 2.0, 2.0, [1.0; 4])]
+        } else {
+            (0..10)
+                .map(|i| {
+                    json!({"ty": 0, "nm": format!("use {i}"), "ind": i + 1, "refId": format!("c{}", level + 1),
+                               "w": 40, "h": 40, "ip": 0, "op": 10, "st": 0, "ks": {}})
+                })
+                .collect()
+        };
+        assets.push(json!({"id": format!("c{level}"), "layers": layers}));
+    }
+    let d = json!({"v": "5.7.1", "fr": 10, "ip": 0, "op": 10, "w": 40, "h": 40, "assets": assets,
+        "layers": [{"ty": 0, "nm": "top", "ind": 1, "refId": "c0", "w": 40, "h": 40, "ip": 0, "op": 10, "st": 0, "ks": {}}]});
+    let start = std::time::Instant::now();
+    let a = anim_of(&d, &LoadOptions::default());
+    let f = a.render(0, 0).unwrap();
+    assert!(f.fill.get(0, 0)[3] > 0.99);
+    assert!(start.elapsed().as_secs() < 20, "{:?}", start.elapsed());
+}

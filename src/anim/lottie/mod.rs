@@ -34,6 +34,7 @@ use crate::error::{Error, Result};
 use crate::img::{Plane, Rgba};
 use model::{Composition, Content, Model, Shape};
 use render::{Pass, Target};
+use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -125,38 +126,50 @@ fn has_strokes(model: &Model, items: &[Shape]) -> bool {
     })
 }
 
-fn layer_has_strokes(model: &Model, comp: &Composition, li: usize, depth: usize) -> bool {
-    if depth > model::MAX_DEPTH {
-        return false;
-    }
+fn layer_has_strokes(model: &Model, comp: &Composition, li: usize, memo: &mut HashMap<usize, bool>) -> bool {
     match &comp.layers[li].content {
         Content::Shapes(items) => has_strokes(model, items),
         Content::Precomp { comp: c, .. } => {
+            if let Some(&known) = memo.get(c) {
+                return known;
+            }
+            memo.insert(*c, false); // cycles end here
             let inner = &model.comps[*c];
-            (0..inner.layers.len())
-                .any(|i| !inner.layers[i].is_matte_source && layer_has_strokes(model, inner, i, depth + 1))
+            let any = (0..inner.layers.len())
+                .any(|i| !inner.layers[i].is_matte_source && layer_has_strokes(model, inner, i, memo));
+            memo.insert(*c, any);
+            any
         }
         _ => false,
     }
 }
 
-fn collect_warnings(model: &Model, comp: &Composition, li: usize, out: &mut Vec<String>, depth: usize) {
+/// Gathers the warnings of a layer, its matte source and everything inside its precomp
+/// (each composition visited once).
+fn collect_warnings(model: &Model, comp: &Composition, li: usize, out: &mut Vec<String>, seen: &mut Vec<usize>) {
     let l = &comp.layers[li];
     for w in &l.warnings {
         if !out.contains(w) {
             out.push(w.clone());
         }
     }
-    if depth > model::MAX_DEPTH {
-        return;
-    }
-    if let Some((_, src)) = l.matte {
-        collect_warnings(model, comp, src, out, depth + 1);
+    if let Some((_, src)) = l.matte
+        && src != li
+    {
+        for w in &comp.layers[src].warnings {
+            if !out.contains(w) {
+                out.push(w.clone());
+            }
+        }
     }
     if let Content::Precomp { comp: c, .. } = &l.content {
+        if seen.contains(c) {
+            return;
+        }
+        seen.push(*c);
         let inner = &model.comps[*c];
         for i in 0..inner.layers.len() {
-            collect_warnings(model, inner, i, out, depth + 1);
+            collect_warnings(model, inner, i, out, seen);
         }
     }
 }
@@ -421,12 +434,12 @@ pub fn from_model(path: &Path, model: Model, options: &LoadOptions) -> Result<An
                 for x in &l.warnings {
                     w.push(x.clone());
                 }
-                collect_warnings(&model, inner, ci, &mut w, 1);
-                layer_has_strokes(&model, inner, ci, 1)
+                collect_warnings(&model, inner, ci, &mut w, &mut Vec::new());
+                layer_has_strokes(&model, inner, ci, &mut HashMap::new())
             }
             _ => {
-                collect_warnings(&model, root, target.layer, &mut w, 0);
-                layer_has_strokes(&model, root, target.layer, 0)
+                collect_warnings(&model, root, target.layer, &mut w, &mut Vec::new());
+                layer_has_strokes(&model, root, target.layer, &mut HashMap::new())
             }
         };
         let color = dominant_color(&model, target, &visible).unwrap_or([1.0, 1.0, 1.0, 1.0]);

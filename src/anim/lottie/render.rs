@@ -67,10 +67,27 @@ fn drawable(path: &tiny_skia::Path, ts: tiny_skia::Transform, pad: f32) -> bool 
     })
 }
 
+/// Most layer and repeater-copy draws in one rendering: reused precomps nested deeply, or
+/// nested repeaters, multiply; past this budget the rest is skipped (with a warning).
+pub const MAX_DRAWS: usize = 10_000;
+
 struct Ctx<'a> {
     model: &'a Model,
     width: u32,
     height: u32,
+    draws: std::cell::Cell<usize>,
+}
+
+impl Ctx<'_> {
+    /// Counts one draw; false once the budget is spent.
+    fn spend(&self) -> bool {
+        let n = self.draws.get() + 1;
+        self.draws.set(n);
+        if n == MAX_DRAWS {
+            log::warn!("more than {MAX_DRAWS} layer or repeater draws in one frame; the rest is skipped");
+        }
+        n <= MAX_DRAWS
+    }
 }
 
 /// Renders `target` at composition time `time` (absolute frame number, `ip` based) into a
@@ -80,7 +97,7 @@ pub fn render(model: &Model, target: Target, time: f32, width: u32, height: u32,
         // Sizes are validated at load; a 1×1 pixmap always exists.
         return Pixmap::new(1, 1).unwrap_or_else(|| unreachable!());
     };
-    let ctx = Ctx { model, width: pm.width(), height: pm.height() };
+    let ctx = Ctx { model, width: pm.width(), height: pm.height(), draws: std::cell::Cell::new(0) };
     let base = Affine2::from_scale(Vec2::splat(scale));
     let root = &model.comps[0];
     if target.layer < root.layers.len() {
@@ -133,7 +150,7 @@ impl Ctx<'_> {
     ) {
         let comp = self.comp(c);
         let layer = &comp.layers[li];
-        if (layer.hidden && !as_region) || !layer.active(t) || depth > super::model::MAX_DEPTH {
+        if (layer.hidden && !as_region) || !layer.active(t) || depth > super::model::MAX_DEPTH || !self.spend() {
             return;
         }
         let lt = layer.local_time(t);
@@ -367,6 +384,9 @@ impl Ctx<'_> {
                     let n = copies.len();
                     let order: Vec<usize> = if *above { (0..n).collect() } else { (0..n).rev().collect() };
                     for c in order {
+                        if !self.spend() {
+                            return;
+                        }
                         // Copy c fades by (c + 1) / n, as ThorVG draws it.
                         let f = (c + 1) as f32 / n as f32;
                         let o = (start_opacity + (end_opacity - start_opacity) * f).clamp(0.0, 1.0);
