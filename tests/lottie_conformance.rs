@@ -118,6 +118,7 @@ fn lottie_conformance_against_thorvg() {
         .collect();
     cases.sort();
     let diffs = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/lottie-diffs");
+    let _ = std::fs::remove_dir_all(&diffs); // no stale images from earlier runs
     let mut failures = Vec::new();
     // Per file: min IoU over all comparisons, count, any ignored, min over those held to MIN_IOU.
     let mut table: BTreeMap<String, (f64, usize, bool, f64)> = BTreeMap::new();

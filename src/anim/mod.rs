@@ -144,7 +144,8 @@ pub struct Background {
 pub struct RegionFrame {
     /// The fills in their own colors, straight RGBA; alpha is the coverage mask.
     pub fill: Plane<Rgba>,
-    /// The strokes, straight RGBA, when the region has any.
+    /// The strokes, straight RGBA, when the region strokes anything at this frame (`None`
+    /// when it has no strokes at all, see [`Region::has_strokes`], or none at this frame).
     pub strokes: Option<Plane<Rgba>>,
 }
 

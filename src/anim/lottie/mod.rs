@@ -290,7 +290,14 @@ impl RegionRenderer for LottieRenderer {
             return Err(Error::param("region", region, format!("0..{}", self.targets.len())));
         }
         let fill = to_plane(&self.render_pass(region, frame, Pass::Fills));
-        let strokes = self.strokes[region].then(|| to_plane(&self.render_pass(region, frame, Pass::Strokes)));
+        // Strokes only when the region strokes something at this frame: most frames of most
+        // layers have none, and a full-canvas plane is the dominant cost of a frame.
+        let strokes = if self.strokes[region] {
+            let pm = self.render_pass(region, frame, Pass::Strokes);
+            pm.pixels().iter().any(|p| p.alpha() > 0).then(|| to_plane(&pm))
+        } else {
+            None
+        };
         Ok(RegionFrame { fill, strokes })
     }
 }
