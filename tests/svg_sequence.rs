@@ -59,6 +59,15 @@ fn groups_are_layers_named_and_tracked_by_name() {
     // Root shapes outside groups: the 4×4 square.
     let root = a.find_region("root").unwrap();
     assert_eq!(a.render(root, 0).unwrap().fill.data().iter().filter(|c| c[3] > 0.99).count(), 16);
+    // Fills and strokes apart: the stroked circle of the unnamed group.
+    let circle = a.find_region("layer 1").unwrap();
+    assert!(a.regions[circle].has_strokes && !a.regions[body].has_strokes);
+    let fr = a.render(circle, 0).unwrap();
+    let strokes = fr.strokes.expect("stroke plane");
+    assert!(fr.fill.get(5, 5)[3] > 0.99 && fr.fill.get(5, 5)[1] > 0.99, "green fill inside");
+    assert!(fr.fill.get(5, 1)[3] < 0.5, "no stroke in the fill plane");
+    assert!(strokes.get(5, 2)[3] > 0.4 && strokes.get(5, 5)[3] == 0.0, "ring only");
+    assert!(a.render(body, 0).unwrap().strokes.is_none());
     // A glob selects the same files.
     let g = anim::load(&d.join("frame*.svg"), &LoadOptions { scale: 0.5, ..Default::default() }).unwrap();
     assert_eq!((g.width, g.height, g.frames), (20, 20, 10));

@@ -18,9 +18,11 @@
 //!
 //! **Rendering.** A layer is rendered by hiding every other top-level element (wrapping it in
 //! `<g display="none">`, so definitions inside it stay usable) and letting resvg draw the
-//! document; fills and strokes are drawn together into [`RegionFrame::fill`]
-//! (`strokes` is `None`: SVG paint order makes the separation ambiguous). Text is drawn only
-//! if fonts are available to usvg, which they are not by default: a warning says so.
+//! document twice: fills only (an injected `stroke: none !important` style) into
+//! [`RegionFrame::fill`], and, for layers that set a stroke, strokes only (`fill: none
+//! !important`) into [`RegionFrame::strokes`]. (Content inside `<mask>` elements is affected
+//! by those styles too.) Text is drawn only if fonts are available to usvg, which they are not
+//! by default: a warning says so. Frame rate: 24 fps (SVG files carry none).
 
 use super::{Animation, LoadOptions, MAX_FRAMES, MAX_SIDE, Region, RegionFrame, RegionKind, RegionRenderer};
 use crate::error::{Error, Result};
@@ -56,6 +58,27 @@ fn is_shape(tag: &str) -> bool {
 struct TopLevel {
     name: String,
     range: Range<usize>,
+    /// Something inside sets a stroke other than `none`.
+    strokes: bool,
+}
+
+/// Injected style sheets (usvg honours `!important` over the file's own styles) that draw
+/// only the fills, or only the strokes.
+const FILLS_ONLY: &str = "* { stroke: none !important; }";
+const STROKES_ONLY: &str = "* { fill: none !important; }";
+
+fn sets_stroke(node: roxmltree::Node) -> bool {
+    node.descendants().filter(|n| n.is_element()).any(|n| {
+        let attr = n.attribute("stroke").is_some_and(|v| v.trim() != "none");
+        let style = n.attribute("style").is_some_and(|st| {
+            st.split(';').any(|decl| {
+                let mut kv = decl.splitn(2, ':');
+                let (k, v) = (kv.next().unwrap_or("").trim(), kv.next().unwrap_or("").trim());
+                k == "stroke" && v != "none" && !v.is_empty()
+            })
+        });
+        attr || style
+    })
 }
 
 fn parse_xml<'a>(path: &Path, text: &'a str) -> Result<roxmltree::Document<'a>> {
@@ -98,7 +121,7 @@ fn top_level(path: &Path, text: &str) -> Result<(Vec<TopLevel>, bool)> {
         } else {
             continue;
         };
-        out.push(TopLevel { name, range: child.range() });
+        out.push(TopLevel { name, range: child.range(), strokes: sets_stroke(child) });
     }
     Ok((out, has_text))
 }
@@ -124,6 +147,7 @@ fn isolate(text: &str, layers: &[TopLevel], keep: &str) -> String {
 struct SvgSequence {
     files: Vec<PathBuf>,
     names: Vec<String>,
+    strokes: Vec<bool>,
     width: u32,
     height: u32,
     scale: (f32, f32),
@@ -135,16 +159,30 @@ impl RegionRenderer for SvgSequence {
         let name = &self.names[region];
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let (layers, _) = top_level(path, &text)?;
-        let mut pm = tiny_skia::Pixmap::new(self.width, self.height)
-            .ok_or_else(|| Error::animation(path, "could not allocate the canvas"))?;
-        if layers.iter().any(|l| &l.name == name) {
-            let doc = isolate(&text, &layers, name);
-            let opt = usvg::Options { resources_dir: path.parent().map(Path::to_path_buf), ..Default::default() };
-            let tree = usvg::Tree::from_str(&doc, &opt).map_err(|e| Error::animation(path, format!("SVG: {e}")))?;
-            let ts = tiny_skia::Transform::from_scale(self.scale.0, self.scale.1);
-            resvg::render(&tree, ts, &mut pm.as_mut());
-        }
-        Ok(RegionFrame { fill: super::lottie::to_plane(&pm), strokes: None })
+        let draw = |sheet: &str| -> Result<tiny_skia::Pixmap> {
+            let mut pm = tiny_skia::Pixmap::new(self.width, self.height)
+                .ok_or_else(|| Error::animation(path, "could not allocate the canvas"))?;
+            if layers.iter().any(|l| &l.name == name) {
+                let doc = isolate(&text, &layers, name);
+                let opt = usvg::Options {
+                    resources_dir: path.parent().map(Path::to_path_buf),
+                    style_sheet: Some(sheet.to_string()),
+                    ..Default::default()
+                };
+                let tree = usvg::Tree::from_str(&doc, &opt).map_err(|e| Error::animation(path, format!("SVG: {e}")))?;
+                let ts = tiny_skia::Transform::from_scale(self.scale.0, self.scale.1);
+                resvg::render(&tree, ts, &mut pm.as_mut());
+            }
+            Ok(pm)
+        };
+        let fill = super::lottie::to_plane(&draw(FILLS_ONLY)?);
+        let strokes = if self.strokes[region] {
+            let pm = draw(STROKES_ONLY)?;
+            pm.pixels().iter().any(|p| p.alpha() > 0).then(|| super::lottie::to_plane(&pm))
+        } else {
+            None
+        };
+        Ok(RegionFrame { fill, strokes })
     }
 }
 
@@ -164,6 +202,7 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
     // Names in z-order (bottom first), merged over frames; per name, the frames having it.
     let mut order: Vec<String> = Vec::new();
     let mut frames_of: HashMap<String, Vec<usize>> = HashMap::new();
+    let mut stroked: Vec<String> = Vec::new();
     let mut any_text = false;
     for (f, path) in files.iter().enumerate() {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
@@ -202,6 +241,9 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
                 continue;
             }
             seen_here.push(&l.name);
+            if layers.iter().any(|x| x.name == l.name && x.strokes) && !stroked.contains(&l.name) {
+                stroked.push(l.name.clone());
+            }
             let frames = frames_of.entry(l.name.clone()).or_default();
             frames.push(f);
             match order.iter().position(|n| n == &l.name) {
@@ -246,13 +288,14 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
                 kind: if name == ROOT_LAYER { RegionKind::SvgRoot } else { RegionKind::SvgGroup },
                 visible,
                 color: [1.0, 1.0, 1.0, 1.0],
-                has_strokes: false,
+                has_strokes: stroked.contains(name),
                 warnings,
             }
         })
         .collect::<Vec<_>>();
     let frames = files.len();
-    let renderer = SvgSequence { files, names, width, height, scale: (width as f32 / w, height as f32 / h) };
+    let strokes = names.iter().map(|n| stroked.contains(n)).collect();
+    let renderer = SvgSequence { files, names, strokes, width, height, scale: (width as f32 / w, height as f32 / h) };
     let mut anim =
         Animation::new(input.to_path_buf(), width, height, 24.0, frames, regions, None, warnings, Box::new(renderer));
     // Dominant colors from the first visible frame of each region.
