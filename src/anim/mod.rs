@@ -5,8 +5,30 @@
 //! rendered on demand, frame by frame, into its *flat rendering* ([`RegionFrame`]): the fills
 //! in their own colors as straight RGBA, whose alpha is the region's antialiased coverage mask,
 //! with strokes kept apart so later stages can draw them crisp on top.
+//!
+//! Inputs:
+//! - a Lottie `.json` file ([`lottie`]): regions are the top-level layers (a precomp is one
+//!   region unless [`LoadOptions::split_precomps`]); nulls, matte sources, hidden and fully
+//!   transparent helper layers are not regions; the bottom full-canvas solids are the
+//!   [`Background`]. Frame 0 is the composition's `ip`.
+//! - a directory or `dir/*.svg` glob of SVG frames ([`svg`]): regions are the top-level
+//!   groups, identified across frames by name; shapes outside groups form one `root` region.
+//!   Played at 24 fps.
+//! - a directory of PNG masks: one region, 24 fps.
+//!
+//! ```no_run
+//! use fluidymation::anim::{self, LoadOptions};
+//! let a = anim::load("fixtures/demo/waving.json".as_ref(), &LoadOptions::default())?;
+//! for (i, r) in a.regions.iter().enumerate() {
+//!     let frame = a.render(i, r.visible.start)?;
+//!     println!("{} covers {} px", r.name, frame.coverage().threshold(0.5).count());
+//! }
+//! # Ok::<(), fluidymation::Error>(())
+//! ```
 
+pub mod lottie;
 mod masks;
+pub mod svg;
 
 use crate::error::{Error, Result};
 use crate::img::{Plane, Rgba};
@@ -122,7 +144,8 @@ pub struct Background {
 pub struct RegionFrame {
     /// The fills in their own colors, straight RGBA; alpha is the coverage mask.
     pub fill: Plane<Rgba>,
-    /// The strokes, straight RGBA, when the region has any.
+    /// The strokes, straight RGBA, when the region strokes anything at this frame (`None`
+    /// when it has no strokes at all, see [`Region::has_strokes`], or none at this frame).
     pub strokes: Option<Plane<Rgba>>,
 }
 
@@ -232,6 +255,37 @@ impl Animation {
     }
 }
 
+/// Area-weighted color histogram (5 bits per channel) for a region's dominant color.
+#[derive(Clone, Debug, Default)]
+pub struct ColorHistogram {
+    bins: std::collections::HashMap<u16, (f64, [f64; 3])>,
+}
+
+impl ColorHistogram {
+    /// Adds every pixel of a flat rendering, weighted by its alpha.
+    pub fn add(&mut self, fill: &Plane<Rgba>) {
+        for c in fill.data() {
+            if c[3].is_nan() || c[3] <= 0.0 {
+                continue;
+            }
+            let q = |v: f32| ((v.clamp(0.0, 1.0) * 31.0).round() as u16) & 31;
+            let e = self.bins.entry(q(c[0]) << 10 | q(c[1]) << 5 | q(c[2])).or_insert((0.0, [0.0; 3]));
+            let a = c[3] as f64;
+            e.0 += a;
+            for (acc, &v) in e.1.iter_mut().zip(c) {
+                *acc += v as f64 * a;
+            }
+        }
+    }
+
+    /// The mean color of the heaviest bin (ties broken by the lower bin), opaque; `None` when
+    /// nothing was covered.
+    pub fn dominant(&self) -> Option<Rgba> {
+        let (_, (w, sum)) = self.bins.iter().max_by(|a, b| a.1.0.total_cmp(&b.1.0).then(b.0.cmp(a.0)))?;
+        Some([(sum[0] / w) as f32, (sum[1] / w) as f32, (sum[2] / w) as f32, 1.0])
+    }
+}
+
 /// Loads an animation: a `.json` Lottie file, a directory or glob of SVG files, or a
 /// directory of PNG masks (one region).
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Animation> {
@@ -241,9 +295,8 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Animation> {
     let is_dir = path.is_dir();
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
     if is_dir || crate::seq::is_glob(path) {
-        let svgs = crate::seq::list_sequence(path, &["svg"]);
-        if svgs.is_ok() {
-            return Err(Error::animation(path, "SVG frame sequences are not supported yet"));
+        if crate::seq::list_sequence(path, &["svg"]).is_ok() {
+            return svg::load(path, options);
         }
         return masks::load(path, options);
     }
@@ -251,7 +304,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Animation> {
         return Err(Error::io(path, std::io::Error::new(std::io::ErrorKind::NotFound, "no such file or directory")));
     }
     match ext.as_deref() {
-        Some("json") | Some("lottie") => Err(Error::animation(path, "Lottie input is not supported yet")),
+        Some("json") => lottie::load(path, options),
         _ => Err(Error::animation(
             path,
             "unknown input: expected a Lottie .json file, a directory or glob of SVG frames, or a directory of PNG masks",

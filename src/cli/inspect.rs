@@ -1,27 +1,242 @@
-//! `fluidymation inspect`: what is in an animation.
+//! `fluidymation inspect`: what is in an animation, and optionally its masks.
 
 use super::Ctx;
-use anyhow::Context;
-use fluidymation::anim::{self, LoadOptions};
+use anyhow::{Context, bail};
+use fluidymation::anim::{self, Animation, LoadOptions};
+use fluidymation::img::Plane;
+use rayon::prelude::*;
+use std::fmt::Write as _;
+use std::io::IsTerminal;
+use std::ops::Range;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Arguments of `inspect`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// A Lottie .json file, a directory or glob of SVG frames, or a directory of PNG masks.
     pub input: PathBuf,
+    /// Print the report as JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Write each region's mask per frame to DIR/<NN>_<slug>/<frame:04>.png (255 inside,
+    /// antialiased edges; frame 0001 is the animation's first frame).
+    #[arg(long, value_name = "DIR")]
+    pub masks: Option<PathBuf>,
+    /// Only these frames, 1-based and inclusive: `A..B`, `A..`, `..B` or `N`.
+    #[arg(long, value_name = "A..B")]
+    pub frames: Option<String>,
     /// Scale the canvas (0.5 = half size).
     #[arg(long, default_value_t = 1.0)]
     pub scale: f32,
+    /// Make each layer inside a top-level precomp a region of its own (`outer/inner`).
+    #[arg(long)]
+    pub split_precomps: bool,
+}
+
+/// Parses `A..B` (1-based, inclusive) into a 0-based half-open range within `0..total`.
+pub fn parse_frames(spec: &str, total: usize) -> anyhow::Result<Range<usize>> {
+    let spec = spec.trim();
+    let num = |s: &str, default: usize| -> anyhow::Result<usize> {
+        let s = s.trim();
+        if s.is_empty() {
+            return Ok(default);
+        }
+        s.parse::<usize>().with_context(|| format!("'{s}' is not a frame number"))
+    };
+    let (a, b) = match spec.split_once("..") {
+        Some((a, b)) => (num(a, 1)?, num(b.trim_start_matches('='), total)?),
+        None => {
+            let n = num(spec, 1)?;
+            (n, n)
+        }
+    };
+    if a == 0 || b == 0 {
+        bail!("--frames {spec}: frames are numbered from 1");
+    }
+    if a > b {
+        bail!("--frames {spec}: the first frame is after the last");
+    }
+    if a > total {
+        bail!("--frames {spec}: the animation has only {total} frames");
+    }
+    Ok(a - 1..b.min(total))
+}
+
+fn hex(c: [f32; 4]) -> String {
+    let b = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+    format!("#{:02x}{:02x}{:02x}", b(c[0]), b(c[1]), b(c[2]))
+}
+
+fn frames_label(r: &Range<usize>) -> String {
+    if r.is_empty() { "none".to_string() } else { format!("{}..{}", r.start + 1, r.end) }
+}
+
+struct Stats {
+    mean_coverage: f64,
+}
+
+/// Renders every region over `range` (writing masks when asked) and measures coverage.
+fn measure(a: &Animation, range: &Range<usize>, masks: Option<&PathBuf>, ctx: &Ctx) -> anyhow::Result<Vec<Stats>> {
+    let jobs: Vec<(usize, usize)> = (0..a.regions.len()).flat_map(|r| range.clone().map(move |f| (r, f))).collect();
+    if let Some(dir) = masks {
+        for r in &a.regions {
+            let d = dir.join(r.dir_name());
+            std::fs::create_dir_all(&d).with_context(|| format!("could not create '{}'", d.display()))?;
+        }
+    }
+    let show = masks.is_some() && !ctx.quiet && std::io::stderr().is_terminal() && jobs.len() > 8;
+    let bar = if show {
+        let pb = indicatif::ProgressBar::new(jobs.len() as u64);
+        if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} masks {eta}") {
+            pb.set_style(style);
+        }
+        Some(pb)
+    } else {
+        None
+    };
+    let done = AtomicUsize::new(0);
+    let pixels = (a.width as f64) * (a.height as f64);
+    let results: Vec<anyhow::Result<(usize, f64)>> = jobs
+        .par_iter()
+        .map(|&(r, f)| {
+            let frame =
+                a.render(r, f).with_context(|| format!("could not render '{}' frame {}", a.regions[r].name, f + 1))?;
+            let cov: Plane<f32> = frame.coverage();
+            let sum: f64 = cov.data().iter().map(|&v| v as f64).sum();
+            if let Some(dir) = masks {
+                let path = dir.join(a.regions[r].dir_name()).join(format!("{:04}.png", f + 1));
+                fluidymation::img::save_gray(&path, &cov)
+                    .with_context(|| format!("could not write '{}'", path.display()))?;
+            }
+            let n = done.fetch_add(1, Ordering::Relaxed);
+            if let Some(pb) = &bar {
+                pb.set_position(n as u64 + 1);
+            }
+            Ok((r, sum / pixels))
+        })
+        .collect();
+    if let Some(pb) = bar {
+        pb.finish_and_clear();
+    }
+    let mut sums = vec![(0.0f64, 0usize); a.regions.len()];
+    for res in results {
+        let (r, c) = res?;
+        sums[r].0 += c;
+        sums[r].1 += 1;
+    }
+    Ok(sums.into_iter().map(|(s, n)| Stats { mean_coverage: if n > 0 { s / n as f64 } else { 0.0 } }).collect())
 }
 
 /// Runs `inspect`.
-pub fn run(args: Args, _ctx: &Ctx) -> anyhow::Result<()> {
-    let opts = LoadOptions { scale: args.scale, ..Default::default() };
+pub fn run(args: Args, ctx: &Ctx) -> anyhow::Result<()> {
+    let opts = LoadOptions { scale: args.scale, split_precomps: args.split_precomps };
     let a = anim::load(&args.input, &opts).with_context(|| format!("could not load '{}'", args.input.display()))?;
-    println!("{}x{} px, {} fps, {} frames ({:.2} s)", a.width, a.height, a.fps, a.frames, a.duration());
-    for r in &a.regions {
-        println!("{:02} {} [{}] frames {}..{}", r.index, r.name, r.kind.as_str(), r.visible.start + 1, r.visible.end);
+    let range = match &args.frames {
+        Some(spec) => parse_frames(spec, a.frames)?,
+        None => 0..a.frames,
+    };
+    let stats = measure(&a, &range, args.masks.as_ref(), ctx)?;
+    let mut out = String::new();
+    if args.json {
+        let regions: Vec<serde_json::Value> = a
+            .regions
+            .iter()
+            .zip(&stats)
+            .map(|(r, s)| {
+                serde_json::json!({
+                    "index": r.index,
+                    "name": r.name,
+                    "kind": r.kind.as_str(),
+                    "color": hex(r.color),
+                    "visible": {"first": r.visible.start + 1, "last": r.visible.end, "count": r.visible.len()},
+                    "has_strokes": r.has_strokes,
+                    "mean_coverage": s.mean_coverage,
+                    "warnings": r.warnings,
+                })
+            })
+            .collect();
+        let doc = serde_json::json!({
+            "input": a.path.display().to_string(),
+            "width": a.width,
+            "height": a.height,
+            "fps": a.fps,
+            "frames": a.frames,
+            "duration": a.duration(),
+            "measured_frames": {"first": range.start + 1, "last": range.end},
+            "background": a.background.as_ref().map(|b| serde_json::json!({"name": b.name, "color": hex(b.color)})),
+            "regions": regions,
+            "warnings": a.warnings,
+        });
+        writeln!(out, "{}", serde_json::to_string_pretty(&doc)?)?;
+        return emit(&out);
     }
-    Ok(())
+    writeln!(out, "{}", a.path.display())?;
+    writeln!(
+        out,
+        "  {}x{} px, {} fps, {} frames ({:.2} s)",
+        a.width,
+        a.height,
+        (a.fps * 1000.0).round() / 1000.0,
+        a.frames,
+        a.duration()
+    )?;
+    match &a.background {
+        Some(b) => writeln!(out, "  background: {} {}", hex(b.color), b.name)?,
+        None => writeln!(out, "  background: none")?,
+    }
+    if range != (0..a.frames) {
+        writeln!(out, "  measured frames {}", frames_label(&range))?;
+    }
+    for w in &a.warnings {
+        writeln!(out, "  warning: {w}")?;
+    }
+    writeln!(out, "  {:>2}  {:<24} {:<13} {:<7} {:<11} {:>8}", "#", "name", "kind", "color", "visible", "coverage")?;
+    for (r, s) in a.regions.iter().zip(&stats) {
+        writeln!(
+            out,
+            "  {:02}  {:<24} {:<13} {:<7} {:<11} {:>7.2}%{}",
+            r.index,
+            r.name,
+            r.kind.as_str(),
+            hex(r.color),
+            frames_label(&r.visible),
+            s.mean_coverage * 100.0,
+            if r.has_strokes { "  +strokes" } else { "" }
+        )?;
+        for w in &r.warnings {
+            writeln!(out, "        warning: {w}")?;
+        }
+    }
+    if let Some(dir) = &args.masks {
+        writeln!(out, "  masks written to {}", dir.display())?;
+    }
+    emit(&out)
+}
+
+/// Writes the report; a closed pipe (`| head`) is not an error.
+fn emit(out: &str) -> anyhow::Result<()> {
+    use std::io::Write;
+    match std::io::stdout().lock().write_all(out.as_bytes()) {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        r => r.context("could not write to stdout"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_ranges() {
+        assert_eq!(parse_frames("1..10", 48).unwrap(), 0..10);
+        assert_eq!(parse_frames("5", 48).unwrap(), 4..5);
+        assert_eq!(parse_frames("40..", 48).unwrap(), 39..48);
+        assert_eq!(parse_frames("..3", 48).unwrap(), 0..3);
+        assert_eq!(parse_frames("1..100", 48).unwrap(), 0..48);
+        assert!(parse_frames("0..3", 48).is_err());
+        assert!(parse_frames("9..3", 48).is_err());
+        assert!(parse_frames("60..70", 48).is_err());
+        assert!(parse_frames("x", 48).is_err());
+    }
 }

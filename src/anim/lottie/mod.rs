@@ -1,0 +1,470 @@
+//! Lottie (Bodymovin JSON) input, in three steps like usvg/velato: [`schema`] (serde mirror of
+//! the JSON, tolerant of 4.x and 5.x layouts) → [`model`] (resolved layers, transforms and
+//! shapes whose [`value::Value`]s `evaluate(frame)`) → [`render`] (tiny-skia, no JSON).
+//!
+//! Supported: shape, solid, null and precomp layers (assets, nesting, reuse, time remap,
+//! `ip`/`op`/`st`/`sr`, parenting in any order, hidden layers); layer and group transforms
+//! (anchor, position incl. split and spatial tangents, scale, rotation, skew, opacity);
+//! keyframes with per-dimension bezier easing, hold keyframes and 4.x `e` end values;
+//! shapes `gr sh rc el sr fl gf st gs tm rd rp`; masks (add, subtract, intersect, lighten,
+//! darken, difference, inverted, opacity, expansion) and track mattes (alpha, luma,
+//! inverted; `tt`/`td` and `tp`).
+//!
+//! Not supported, reported as warnings naming the feature and the layer: text and image
+//! layers, expressions (the keyframed value is used), effects, layer styles, blend modes,
+//! 3D, auto-orient, merge paths other than plain merging (paths are combined, no boolean
+//! operation), the offset/puker-bloat/twist/zig-zag modifiers.
+//!
+//! Regions: every top-level layer that draws something is a region, except nulls, matte
+//! sources (`td`), hidden layers and the background (the bottom-most run of solid layers that
+//! cover the whole canvas). With [`LoadOptions::split_precomps`](super::LoadOptions) each
+//! drawable layer inside a top-level precomp is a region of its own, named `outer/inner`.
+//! A region's `visible` range comes from the layers' in and out points.
+
+pub mod geom;
+pub mod model;
+pub mod render;
+pub mod schema;
+pub mod value;
+
+use super::{
+    Animation, Background, LoadOptions, MAX_FRAMES, MAX_SIDE, Region, RegionFrame, RegionKind, RegionRenderer,
+};
+use crate::error::{Error, Result};
+use crate::img::{Plane, Rgba};
+use model::{Composition, Content, Model, Shape};
+use render::{Pass, Target};
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::Arc;
+
+/// Largest frame rate accepted.
+pub const MAX_FPS: f64 = 1000.0;
+
+/// Parses Lottie JSON text into the resolved model. `path` is only used in messages.
+pub fn parse(path: &Path, text: &str) -> Result<Model> {
+    if text.trim().is_empty() {
+        return Err(Error::Empty { path: path.to_path_buf(), what: "the file is empty".into() });
+    }
+    let root: schema::Root = serde_json::from_str(text).map_err(|e| Error::Json {
+        path: path.to_path_buf(),
+        line: e.line(),
+        column: e.column(),
+        message: e.to_string(),
+    })?;
+    let need = |v: Option<f64>, key: &str, what: &str| -> Result<f64> {
+        match v {
+            None => Err(Error::animation(
+                path,
+                format!("missing '{key}' ({what}); is this a Lottie file? Re-export it with Bodymovin"),
+            )),
+            Some(x) if !x.is_finite() => {
+                Err(Error::animation(path, format!("'{key}' ({what}) is not a finite number")))
+            }
+            Some(x) => Ok(x),
+        }
+    };
+    let w = need(root.w, "w", "canvas width")?;
+    let h = need(root.h, "h", "canvas height")?;
+    let fr = need(root.fr, "fr", "frame rate")?;
+    let ip = root.ip.map_or(Ok(0.0), |x| need(Some(x), "ip", "first frame"))?;
+    let op = need(root.op, "op", "end frame")?;
+    for (v, what) in [(w, "canvas width 'w'"), (h, "canvas height 'h'")] {
+        if v < 1.0 {
+            return Err(Error::animation(path, format!("{what} is {v}; it must be at least 1 pixel")));
+        }
+        if v > MAX_SIDE as f64 {
+            return Err(Error::Limit { path: path.to_path_buf(), what: what.into(), value: v, limit: MAX_SIDE as f64 });
+        }
+    }
+    if fr <= 0.0 {
+        return Err(Error::animation(path, format!("frame rate 'fr' is {fr}; it must be positive")));
+    }
+    if fr > MAX_FPS {
+        return Err(Error::Limit {
+            path: path.to_path_buf(),
+            what: "frame rate 'fr'".into(),
+            value: fr,
+            limit: MAX_FPS,
+        });
+    }
+    if ip.abs() > 1e9 || op.abs() > 1e9 {
+        return Err(Error::animation(path, format!("'ip' {ip} / 'op' {op} are absurd frame numbers")));
+    }
+    if op <= ip {
+        return Err(Error::animation(
+            path,
+            format!("end frame 'op' ({op}) is not after the first frame 'ip' ({ip}); the animation has no frames"),
+        ));
+    }
+    let frames = (op - ip).ceil();
+    if frames > MAX_FRAMES as f64 {
+        return Err(Error::Limit {
+            path: path.to_path_buf(),
+            what: "frame count ('op' - 'ip')".into(),
+            value: frames,
+            limit: MAX_FRAMES as f64,
+        });
+    }
+    if root.layers.is_none() {
+        return Err(Error::animation(path, "missing 'layers'; is this a Lottie file?"));
+    }
+    Ok(model::build(&root, w as f32, h as f32, fr as f32, ip as f32, op as f32))
+}
+
+/// Number of frames of a model.
+pub fn frame_count(model: &Model) -> usize {
+    (model.op - model.ip).ceil().max(0.0) as usize
+}
+
+fn has_strokes(model: &Model, items: &[Shape]) -> bool {
+    let _ = model;
+    items.iter().any(|s| match s {
+        Shape::Stroke { .. } => true,
+        Shape::Group { items, .. } => has_strokes(model, items),
+        _ => false,
+    })
+}
+
+fn layer_has_strokes(model: &Model, comp: &Composition, li: usize, memo: &mut HashMap<usize, bool>) -> bool {
+    match &comp.layers[li].content {
+        Content::Shapes(items) => has_strokes(model, items),
+        Content::Precomp { comp: c, .. } => {
+            if let Some(&known) = memo.get(c) {
+                return known;
+            }
+            memo.insert(*c, false); // cycles end here
+            let inner = &model.comps[*c];
+            let any = (0..inner.layers.len())
+                .any(|i| !inner.layers[i].is_matte_source && layer_has_strokes(model, inner, i, memo));
+            memo.insert(*c, any);
+            any
+        }
+        _ => false,
+    }
+}
+
+/// Gathers the warnings of a layer, its matte source and everything inside its precomp
+/// (each composition visited once).
+fn collect_warnings(model: &Model, comp: &Composition, li: usize, out: &mut Vec<String>, seen: &mut Vec<usize>) {
+    let l = &comp.layers[li];
+    for w in &l.warnings {
+        if !out.contains(w) {
+            out.push(w.clone());
+        }
+    }
+    if let Some((_, src)) = l.matte
+        && src != li
+    {
+        for w in &comp.layers[src].warnings {
+            if !out.contains(w) {
+                out.push(w.clone());
+            }
+        }
+    }
+    if let Content::Precomp { comp: c, .. } = &l.content {
+        if seen.contains(c) {
+            return;
+        }
+        seen.push(*c);
+        let inner = &model.comps[*c];
+        for i in 0..inner.layers.len() {
+            collect_warnings(model, inner, i, out, seen);
+        }
+    }
+}
+
+/// True when the layer draws nothing by its nature (null, unsupported types) or is fully
+/// transparent at every frame (a helper layer, often a parent).
+fn draws_nothing(l: &model::Layer) -> bool {
+    matches!(l.content, Content::Nothing)
+        || matches!(l.transform.opacity, value::Value::Fixed(o) if o.is_nan() || o <= 0.0)
+}
+
+/// Whether a root layer is a full-canvas solid, opaque and unmasked, visible throughout.
+fn is_background(model: &Model, li: usize) -> Option<[f32; 4]> {
+    let l = &model.comps[0].layers[li];
+    let Content::Solid { color, width, height } = l.content else { return None };
+    if !l.masks.is_empty() || l.matte.is_some() || l.hidden || l.ip > model.ip || l.op < model.op {
+        return None;
+    }
+    // Check coverage and opacity at a few times.
+    let n = frame_count(model);
+    for f in [0, n / 2, n.saturating_sub(1)] {
+        let t = model.ip + f as f32;
+        let lt = l.local_time(t);
+        if l.transform.opacity(lt) < 0.999 {
+            return None;
+        }
+        let mut m = l.transform.matrix(lt);
+        let mut cur = l.parent;
+        let mut guard = 0;
+        while let Some(p) = cur {
+            guard += 1;
+            if guard > 64 {
+                return None;
+            }
+            let pl = &model.comps[0].layers[p];
+            m = pl.transform.matrix(pl.local_time(t)) * m;
+            cur = pl.parent;
+        }
+        let inv = m.inverse();
+        if !inv.is_finite() {
+            return None;
+        }
+        for c in [(0.0, 0.0), (model.width, 0.0), (0.0, model.height), (model.width, model.height)] {
+            let p = inv.transform_point2(glam::Vec2::new(c.0, c.1));
+            if p.x < -0.5 || p.y < -0.5 || p.x > width + 0.5 || p.y > height + 0.5 {
+                return None;
+            }
+        }
+        if m.matrix2.x_axis.y.abs() > 1e-4 || m.matrix2.y_axis.x.abs() > 1e-4 {
+            return None;
+        }
+    }
+    Some(color)
+}
+
+/// Frame range (0-based) of composition times `[ip, op)`.
+fn frame_range(model: &Model, ip: f32, op: f32) -> std::ops::Range<usize> {
+    let n = frame_count(model) as f32;
+    let s = (ip - model.ip).ceil().clamp(0.0, n);
+    let e = (op - model.ip).ceil().clamp(0.0, n);
+    let (s, e) = (s as usize, e as usize);
+    if e > s { s..e } else { s..s }
+}
+
+/// The renderer behind a loaded Lottie [`Animation`].
+pub struct LottieRenderer {
+    model: Arc<Model>,
+    targets: Vec<Target>,
+    strokes: Vec<bool>,
+    width: u32,
+    height: u32,
+    scale: f32,
+}
+
+/// Converts a premultiplied pixmap into straight RGBA in `0..=1` (one sequential pass; at
+/// large sizes this conversion, not the rasterization, dominates the cost of a frame).
+pub fn to_plane(pm: &tiny_skia::Pixmap) -> Plane<Rgba> {
+    let data = pm
+        .pixels()
+        .iter()
+        .map(|p| {
+            let a = p.alpha();
+            if a == 0 {
+                return [0.0; 4];
+            }
+            let af = a as f32 / 255.0;
+            let inv = 1.0 / (255.0 * af);
+            let c = |v: u8| (v as f32 * inv).min(1.0);
+            [c(p.red()), c(p.green()), c(p.blue()), af]
+        })
+        .collect();
+    Plane::from_vec(pm.width() as usize, pm.height() as usize, data).unwrap_or_else(|| Plane::new(0, 0))
+}
+
+impl LottieRenderer {
+    /// Renders a region at composition frame `frame` (0-based) in one pass, at the loaded size.
+    pub fn render_pass(&self, region: usize, frame: usize, pass: Pass) -> tiny_skia::Pixmap {
+        render::render(
+            &self.model,
+            self.targets[region],
+            self.model.ip + frame as f32,
+            self.width,
+            self.height,
+            self.scale,
+            pass,
+        )
+    }
+
+    /// The model.
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+}
+
+impl RegionRenderer for LottieRenderer {
+    fn render(&self, region: usize, frame: usize) -> Result<RegionFrame> {
+        if region >= self.targets.len() {
+            return Err(Error::param("region", region, format!("0..{}", self.targets.len())));
+        }
+        let fill = to_plane(&self.render_pass(region, frame, Pass::Fills));
+        // Strokes only when the region strokes something at this frame: most frames of most
+        // layers have none, and a full-canvas plane is the dominant cost of a frame.
+        let strokes = if self.strokes[region] {
+            let pm = self.render_pass(region, frame, Pass::Strokes);
+            pm.pixels().iter().any(|p| p.alpha() > 0).then(|| to_plane(&pm))
+        } else {
+            None
+        };
+        Ok(RegionFrame { fill, strokes })
+    }
+}
+
+/// The dominant color (area-weighted mode over a 5-bit-per-channel histogram) of a region,
+/// from a few frames rendered small.
+fn dominant_color(model: &Model, target: Target, visible: &std::ops::Range<usize>) -> Option<Rgba> {
+    let side = model.width.max(model.height);
+    let scale = (96.0 / side).min(1.0);
+    let (w, h) = (((model.width * scale).round() as u32).max(1), ((model.height * scale).round() as u32).max(1));
+    let mut hist = super::ColorHistogram::default();
+    let n = visible.len();
+    if n == 0 {
+        return None;
+    }
+    let samples = 5.min(n);
+    // Fills decide; a region that only strokes takes its stroke color.
+    for pass in [Pass::Fills, Pass::Strokes] {
+        for s in 0..samples {
+            let f = visible.start + s * n / samples;
+            let pm = render::render(model, target, model.ip + f as f32, w, h, scale, pass);
+            hist.add(&to_plane(&pm));
+        }
+        if let Some(c) = hist.dominant() {
+            return Some(c);
+        }
+    }
+    None
+}
+
+/// Loads a Lottie file.
+pub fn load(path: &Path, options: &LoadOptions) -> Result<Animation> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let model = parse(path, &text)?;
+    from_model(path, model, options)
+}
+
+/// Builds the regions of a parsed model.
+pub fn from_model(path: &Path, model: Model, options: &LoadOptions) -> Result<Animation> {
+    let width = ((model.width * options.scale).round() as u32).clamp(1, MAX_SIDE);
+    let height = ((model.height * options.scale).round() as u32).clamp(1, MAX_SIDE);
+    let frames = frame_count(&model);
+    let root = &model.comps[0];
+    let mut warnings: Vec<String> = model.warnings.clone();
+    if root.layers.is_empty() {
+        return Err(Error::Empty { path: path.to_path_buf(), what: "the animation has no layers".into() });
+    }
+    // Background: the bottom-most run of full-canvas solids.
+    let mut background = None;
+    let mut bg_layers = Vec::new();
+    for li in (0..root.layers.len()).rev() {
+        let l = &root.layers[li];
+        if l.hidden || draws_nothing(l) {
+            continue;
+        }
+        match is_background(&model, li) {
+            Some(color) => {
+                bg_layers.push(li);
+                background = Some(Background { name: l.name.clone(), color });
+            }
+            None => break,
+        }
+    }
+    let mut specs: Vec<(Target, String, RegionKind, std::ops::Range<usize>, usize)> = Vec::new();
+    for (li, l) in root.layers.iter().enumerate() {
+        if bg_layers.contains(&li) || l.is_matte_source || l.ty == 3 {
+            continue;
+        }
+        if l.hidden {
+            continue;
+        }
+        if draws_nothing(l) {
+            for w in &l.warnings {
+                if !warnings.contains(w) {
+                    warnings.push(w.clone());
+                }
+            }
+            continue;
+        }
+        let visible = frame_range(&model, l.ip, l.op);
+        match (&l.content, options.split_precomps) {
+            (Content::Precomp { comp, .. }, true) => {
+                let inner = &model.comps[*comp];
+                for (ci, c) in inner.layers.iter().enumerate() {
+                    if c.is_matte_source || c.hidden || draws_nothing(c) {
+                        continue;
+                    }
+                    // Child in/out points in outer composition time (no time remap).
+                    let vis = if l.time_remap.is_some() {
+                        visible.clone()
+                    } else {
+                        let (a, b) = (c.ip * l.sr + l.st, c.op * l.sr + l.st);
+                        let (a, b) = if a <= b { (a, b) } else { (b, a) };
+                        let r = frame_range(&model, a.max(l.ip), b.min(l.op));
+                        if r.is_empty() { r.start..r.start } else { r }
+                    };
+                    specs.push((
+                        Target { layer: li, child: Some(ci) },
+                        format!("{}/{}", l.name, c.name),
+                        RegionKind::PrecompChild,
+                        vis,
+                        ci,
+                    ));
+                }
+            }
+            (content, _) => {
+                let kind = match content {
+                    Content::Precomp { .. } => RegionKind::Precomp,
+                    Content::Solid { .. } => RegionKind::Solid,
+                    _ => RegionKind::Shape,
+                };
+                specs.push((Target { layer: li, child: None }, l.name.clone(), kind, visible, li));
+            }
+        }
+    }
+    if specs.is_empty() {
+        return Err(Error::Empty {
+            path: path.to_path_buf(),
+            what:
+                "no layer draws anything that could be stylized (only nulls, mattes, background or unsupported layers)"
+                    .into(),
+        });
+    }
+    let mut regions = Vec::with_capacity(specs.len());
+    let mut targets = Vec::with_capacity(specs.len());
+    let mut strokes = Vec::with_capacity(specs.len());
+    let mut names: Vec<String> = Vec::new();
+    for (n, (target, name, kind, visible, _)) in specs.into_iter().enumerate() {
+        let mut unique = name.clone();
+        let mut k = 2;
+        while names.contains(&unique) {
+            unique = format!("{name} ({k})");
+            k += 1;
+        }
+        names.push(unique.clone());
+        let l = &root.layers[target.layer];
+        let mut w = Vec::new();
+        let has = match (target.child, &l.content) {
+            (Some(ci), Content::Precomp { comp, .. }) => {
+                let inner = &model.comps[*comp];
+                for x in &l.warnings {
+                    w.push(x.clone());
+                }
+                collect_warnings(&model, inner, ci, &mut w, &mut Vec::new());
+                layer_has_strokes(&model, inner, ci, &mut HashMap::new())
+            }
+            _ => {
+                collect_warnings(&model, root, target.layer, &mut w, &mut Vec::new());
+                layer_has_strokes(&model, root, target.layer, &mut HashMap::new())
+            }
+        };
+        let color = dominant_color(&model, target, &visible).unwrap_or([1.0, 1.0, 1.0, 1.0]);
+        regions.push(Region { index: n + 1, name: unique, kind, visible, color, has_strokes: has, warnings: w });
+        targets.push(target);
+        strokes.push(has);
+    }
+    let fps = model.fps as f64;
+    let renderer = LottieRenderer { model: Arc::new(model), targets, strokes, width, height, scale: options.scale };
+    Ok(Animation::new(
+        path.to_path_buf(),
+        width,
+        height,
+        fps,
+        frames,
+        regions,
+        background,
+        warnings,
+        Box::new(renderer),
+    ))
+}

@@ -1,0 +1,901 @@
+//! The resolved Lottie model: layers, transforms and shapes with [`Value`]s, built from the
+//! [`schema`](super::schema) once at load time. Nothing here knows JSON keys any more; every
+//! unsupported or malformed thing became a warning naming the feature and the layer.
+
+use super::geom::Bez;
+use super::schema;
+use super::value::{Color, PropError, Value, parse_prop};
+use glam::{Affine2, Vec2};
+use serde_json::Value as Json;
+use std::collections::HashMap;
+
+/// Deepest precomp nesting followed (protects against reference cycles).
+pub const MAX_DEPTH: usize = 16;
+/// Largest repeater copy count drawn.
+pub const MAX_COPIES: f32 = 1000.0;
+
+/// Collects warnings for one layer, each naming the feature and the layer.
+pub struct Warn<'a> {
+    layer: &'a str,
+    out: &'a mut Vec<String>,
+}
+
+impl Warn<'_> {
+    fn add(&mut self, what: impl AsRef<str>) {
+        let msg = format!("layer '{}': {}", self.layer, what.as_ref());
+        if !self.out.contains(&msg) {
+            log::warn!("{msg}");
+            self.out.push(msg);
+        }
+    }
+}
+
+/// Reads a property with a default, warning about expressions and malformed values.
+fn prop<T: super::value::Animatable>(p: Option<&schema::Prop>, default: T, what: &str, w: &mut Warn) -> Value<T> {
+    let Some(p) = p else { return Value::Fixed(default) };
+    if let Some(Json::String(x)) = &p.x
+        && !x.is_empty()
+    {
+        w.add(format!("expressions are not supported ({what}); using its keyframed value"));
+    }
+    let Some(k) = &p.k else { return Value::Fixed(default) };
+    match parse_prop(k) {
+        Ok(v) => v,
+        Err(PropError::Expression) | Err(PropError::Malformed) => {
+            w.add(format!("malformed value of '{what}'; using the default"));
+            Value::Fixed(default)
+        }
+    }
+}
+
+/// A position: one 2D value (with spatial tangents) or split X/Y.
+#[derive(Clone, Debug)]
+pub enum Position {
+    /// `p` as one value.
+    Combined(Value<Vec2>),
+    /// `p` split into `x` and `y`.
+    Split(Value<f32>, Value<f32>),
+}
+
+impl Position {
+    /// The position at `t`.
+    pub fn evaluate(&self, t: f32) -> Vec2 {
+        match self {
+            Position::Combined(v) => v.evaluate_spatial(t),
+            Position::Split(x, y) => Vec2::new(x.evaluate(t), y.evaluate(t)),
+        }
+    }
+}
+
+/// A layer, group or repeater transform.
+#[derive(Clone, Debug)]
+pub struct Transform {
+    /// Anchor point.
+    pub anchor: Value<Vec2>,
+    /// Position.
+    pub position: Position,
+    /// Scale in percent.
+    pub scale: Value<Vec2>,
+    /// Rotation in degrees, clockwise.
+    pub rotation: Value<f32>,
+    /// Skew in degrees.
+    pub skew: Value<f32>,
+    /// Skew axis in degrees.
+    pub skew_axis: Value<f32>,
+    /// Opacity in percent.
+    pub opacity: Value<f32>,
+}
+
+impl Default for Transform {
+    fn default() -> Self {
+        Transform {
+            anchor: Value::Fixed(Vec2::ZERO),
+            position: Position::Combined(Value::Fixed(Vec2::ZERO)),
+            scale: Value::Fixed(Vec2::splat(100.0)),
+            rotation: Value::Fixed(0.0),
+            skew: Value::Fixed(0.0),
+            skew_axis: Value::Fixed(0.0),
+            opacity: Value::Fixed(100.0),
+        }
+    }
+}
+
+impl Transform {
+    fn from_schema(t: Option<&schema::Transform>, w: &mut Warn) -> Transform {
+        let Some(t) = t else { return Transform::default() };
+        let position = match &t.p {
+            Some(p) if p.s.as_ref().is_some_and(|s| s.as_bool() == Some(true) || s.as_f64() == Some(1.0)) => {
+                let sub =
+                    |v: &Option<Json>| v.as_ref().and_then(|v| serde_json::from_value::<schema::Prop>(v.clone()).ok());
+                let (x, y) = (sub(&p.x), sub(&p.y));
+                Position::Split(prop(x.as_ref(), 0.0, "position x", w), prop(y.as_ref(), 0.0, "position y", w))
+            }
+            p => Position::Combined(prop(p.as_ref(), Vec2::ZERO, "position", w)),
+        };
+        if t.rx.is_some() || t.ry.is_some() || t.or.is_some() {
+            w.add("3D rotation (rx/ry/or) is not supported; only the Z rotation is used");
+        }
+        Transform {
+            anchor: prop(t.a.as_ref(), Vec2::ZERO, "anchor", w),
+            position,
+            scale: prop(t.s.as_ref(), Vec2::splat(100.0), "scale", w),
+            rotation: prop(t.r.as_ref().or(t.rz.as_ref()), 0.0, "rotation", w),
+            skew: prop(t.sk.as_ref(), 0.0, "skew", w),
+            skew_axis: prop(t.sa.as_ref(), 0.0, "skew axis", w),
+            opacity: prop(t.o.as_ref(), 100.0, "opacity", w),
+        }
+    }
+
+    /// The matrix at `t`: translate(p) · rotate(r) · skew · scale(s) · translate(−a).
+    pub fn matrix(&self, t: f32) -> Affine2 {
+        let a = self.anchor.evaluate(t);
+        let p = self.position.evaluate(t);
+        let s = self.scale.evaluate(t) / 100.0;
+        let r = self.rotation.evaluate(t).to_radians();
+        let sk = self.skew.evaluate(t);
+        let mut m = Affine2::from_translation(p) * Affine2::from_angle(r);
+        if sk != 0.0 {
+            let sa = self.skew_axis.evaluate(t).to_radians();
+            let shear = Affine2::from_cols(Vec2::new(1.0, 0.0), Vec2::new((-sk.to_radians()).tan(), 1.0), Vec2::ZERO);
+            m = m * Affine2::from_angle(-sa) * shear * Affine2::from_angle(sa);
+        }
+        m * Affine2::from_scale(s) * Affine2::from_translation(-a)
+    }
+
+    /// Opacity at `t` in `0..=1`.
+    pub fn opacity(&self, t: f32) -> f32 {
+        let o = self.opacity.evaluate(t) / 100.0;
+        if o.is_finite() { o.clamp(0.0, 1.0) } else { 0.0 }
+    }
+}
+
+/// Gradient definition shared by `gf` and `gs`.
+#[derive(Clone, Debug)]
+pub struct Gradient {
+    /// Start point.
+    pub start: Value<Vec2>,
+    /// End point.
+    pub end: Value<Vec2>,
+    /// Radial (else linear).
+    pub radial: bool,
+    /// Highlight length in percent (radial).
+    pub highlight_length: Value<f32>,
+    /// Highlight angle in degrees (radial).
+    pub highlight_angle: Value<f32>,
+    /// Number of color stops.
+    pub count: usize,
+    /// The flat stop list.
+    pub stops: Value<Vec<f32>>,
+}
+
+/// Stroke geometry settings.
+#[derive(Clone, Debug)]
+pub struct StrokeStyle {
+    /// Width.
+    pub width: Value<f32>,
+    /// Cap.
+    pub cap: tiny_skia::LineCap,
+    /// Join.
+    pub join: tiny_skia::LineJoin,
+    /// Miter limit.
+    pub miter: f32,
+    /// Dashes: (is gap, length); offset.
+    pub dashes: Vec<(bool, Value<f32>)>,
+    /// Dash offset.
+    pub dash_offset: Option<Value<f32>>,
+}
+
+/// What paints the paths: a flat color or a gradient.
+#[derive(Clone, Debug)]
+pub enum Paint {
+    /// Flat color.
+    Color(Value<Color>),
+    /// Gradient.
+    Gradient(Gradient),
+}
+
+/// An item of a shape list.
+#[derive(Clone, Debug)]
+pub enum Shape {
+    /// A group with its own items and transform.
+    Group {
+        /// Items, top-most first.
+        items: Vec<Shape>,
+        /// The group transform.
+        transform: Transform,
+    },
+    /// A free path.
+    Path(Value<Bez>),
+    /// A rectangle.
+    Rect {
+        /// Center.
+        position: Value<Vec2>,
+        /// Size.
+        size: Value<Vec2>,
+        /// Corner radius.
+        roundness: Value<f32>,
+        /// Counter-clockwise.
+        reverse: bool,
+    },
+    /// An ellipse.
+    Ellipse {
+        /// Center.
+        position: Value<Vec2>,
+        /// Size.
+        size: Value<Vec2>,
+        /// Counter-clockwise.
+        reverse: bool,
+    },
+    /// A star or polygon.
+    Star {
+        /// Star (else polygon).
+        star: bool,
+        /// Center.
+        position: Value<Vec2>,
+        /// Points.
+        points: Value<f32>,
+        /// Rotation.
+        rotation: Value<f32>,
+        /// Outer radius.
+        outer_radius: Value<f32>,
+        /// Outer roundness.
+        outer_roundness: Value<f32>,
+        /// Inner radius.
+        inner_radius: Value<f32>,
+        /// Inner roundness.
+        inner_roundness: Value<f32>,
+        /// Counter-clockwise.
+        reverse: bool,
+    },
+    /// A fill (`fl`, `gf`).
+    Fill {
+        /// Color or gradient.
+        paint: Paint,
+        /// Opacity in percent.
+        opacity: Value<f32>,
+        /// Even-odd (else nonzero).
+        even_odd: bool,
+    },
+    /// A stroke (`st`, `gs`).
+    Stroke {
+        /// Color or gradient.
+        paint: Paint,
+        /// Opacity in percent.
+        opacity: Value<f32>,
+        /// Width, joins, dashes.
+        style: StrokeStyle,
+    },
+    /// Trim paths.
+    Trim {
+        /// Start in percent.
+        start: Value<f32>,
+        /// End in percent.
+        end: Value<f32>,
+        /// Offset in degrees.
+        offset: Value<f32>,
+        /// Sequential (`m` 2) rather than parallel.
+        sequential: bool,
+    },
+    /// Rounded corners.
+    Round(Value<f32>),
+    /// Merge paths with mode 1 merge, 2 add, 3 subtract, 4 intersect, 5 exclude.
+    Merge(u8),
+    /// Repeater.
+    Repeater {
+        /// Copies.
+        copies: Value<f32>,
+        /// Offset (in copies).
+        offset: Value<f32>,
+        /// Per-copy transform.
+        transform: Transform,
+        /// Start opacity of the per-copy fade, percent.
+        start_opacity: Value<f32>,
+        /// End opacity, percent.
+        end_opacity: Value<f32>,
+        /// Copies stacked above (1) or below (2) the original.
+        above: bool,
+    },
+}
+
+fn style_props(s: &schema::Style, ty: &str, w: &mut Warn) -> (Paint, Value<f32>) {
+    let opacity = prop(s.o.as_ref(), 100.0, "opacity", w);
+    let paint = if ty == "gf" || ty == "gs" {
+        let g = s.g.clone().unwrap_or_default();
+        let count = g.p.filter(|p| p.is_finite() && *p >= 0.0).unwrap_or(0.0).min(1000.0) as usize;
+        Paint::Gradient(Gradient {
+            start: prop(s.s.as_ref(), Vec2::ZERO, "gradient start", w),
+            end: prop(s.e.as_ref(), Vec2::ZERO, "gradient end", w),
+            radial: s.t == Some(2.0),
+            highlight_length: prop(s.h.as_ref(), 0.0, "highlight length", w),
+            highlight_angle: prop(s.a.as_ref(), 0.0, "highlight angle", w),
+            count,
+            stops: prop(g.k.as_ref(), Vec::new(), "gradient colors", w),
+        })
+    } else {
+        Paint::Color(prop(s.c.as_ref(), Color([0.0, 0.0, 0.0, 1.0]), "color", w))
+    };
+    (paint, opacity)
+}
+
+fn parse_shapes(items: &[Json], w: &mut Warn, depth: usize) -> Vec<Shape> {
+    let mut out = Vec::new();
+    if depth > 64 {
+        w.add("shape groups nested more than 64 deep; deeper content ignored");
+        return out;
+    }
+    for item in items {
+        let header: schema::ShapeHeader = serde_json::from_value(item.clone()).unwrap_or_default();
+        if header.hd {
+            continue;
+        }
+        let ty = header.ty.unwrap_or_default();
+        if let Some(shape) = parse_shape(&ty, item, w, depth) {
+            out.push(shape);
+        }
+    }
+    out
+}
+
+fn from<T: serde::de::DeserializeOwned + Default>(item: &Json, ty: &str, w: &mut Warn) -> T {
+    match serde_json::from_value(item.clone()) {
+        Ok(v) => v,
+        Err(e) => {
+            w.add(format!("malformed shape item '{ty}' ({e}); using defaults"));
+            T::default()
+        }
+    }
+}
+
+fn parse_shape(ty: &str, item: &Json, w: &mut Warn, depth: usize) -> Option<Shape> {
+    let reverse = |d: Option<f64>| d == Some(3.0);
+    Some(match ty {
+        "gr" => {
+            let g: schema::Group = from(item, ty, w);
+            let tr = g.it.iter().find(|i| i.get("ty").and_then(|t| t.as_str()) == Some("tr"));
+            let transform = match tr {
+                Some(tr) => {
+                    let t: schema::Transform = from(tr, "tr", w);
+                    Transform::from_schema(Some(&t), w)
+                }
+                None => Transform::default(),
+            };
+            let items: Vec<Json> =
+                g.it.into_iter().filter(|i| i.get("ty").and_then(|t| t.as_str()) != Some("tr")).collect();
+            Shape::Group { items: parse_shapes(&items, w, depth + 1), transform }
+        }
+        "sh" => {
+            let g: schema::Geometry = from(item, ty, w);
+            Shape::Path(prop(g.ks.as_ref(), Bez::default(), "path", w))
+        }
+        "rc" => {
+            let g: schema::Geometry = from(item, ty, w);
+            Shape::Rect {
+                position: prop(g.p.as_ref(), Vec2::ZERO, "rect position", w),
+                size: prop(g.s.as_ref(), Vec2::ZERO, "rect size", w),
+                roundness: prop(g.r.as_ref(), 0.0, "rect roundness", w),
+                reverse: reverse(g.d),
+            }
+        }
+        "el" => {
+            let g: schema::Geometry = from(item, ty, w);
+            Shape::Ellipse {
+                position: prop(g.p.as_ref(), Vec2::ZERO, "ellipse position", w),
+                size: prop(g.s.as_ref(), Vec2::ZERO, "ellipse size", w),
+                reverse: reverse(g.d),
+            }
+        }
+        "sr" => {
+            let g: schema::Geometry = from(item, ty, w);
+            Shape::Star {
+                star: g.sy != Some(2.0),
+                position: prop(g.p.as_ref(), Vec2::ZERO, "star position", w),
+                points: prop(g.pt.as_ref(), 5.0, "star points", w),
+                rotation: prop(g.r.as_ref(), 0.0, "star rotation", w),
+                outer_radius: prop(g.or.as_ref(), 0.0, "star outer radius", w),
+                outer_roundness: prop(g.os.as_ref(), 0.0, "star outer roundness", w),
+                inner_radius: prop(g.ir.as_ref(), 0.0, "star inner radius", w),
+                inner_roundness: prop(g.is.as_ref(), 0.0, "star inner roundness", w),
+                reverse: reverse(g.d),
+            }
+        }
+        "fl" | "gf" => {
+            let s: schema::Style = from(item, ty, w);
+            let (paint, opacity) = style_props(&s, ty, w);
+            Shape::Fill { paint, opacity, even_odd: s.r == Some(2.0) }
+        }
+        "st" | "gs" => {
+            let s: schema::Style = from(item, ty, w);
+            let (paint, opacity) = style_props(&s, ty, w);
+            let mut dashes = Vec::new();
+            let mut dash_offset = None;
+            for d in s.d.iter().flatten() {
+                let v = prop(d.v.as_ref(), 0.0, "dash", w);
+                match d.n.as_deref() {
+                    Some("o") => dash_offset = Some(v),
+                    Some("g") => dashes.push((true, v)),
+                    _ => dashes.push((false, v)),
+                }
+            }
+            let style = StrokeStyle {
+                width: prop(s.w.as_ref(), 1.0, "stroke width", w),
+                cap: match s.lc {
+                    Some(2.0) => tiny_skia::LineCap::Round,
+                    Some(3.0) => tiny_skia::LineCap::Square,
+                    _ => tiny_skia::LineCap::Butt,
+                },
+                join: match s.lj {
+                    Some(2.0) => tiny_skia::LineJoin::Round,
+                    Some(3.0) => tiny_skia::LineJoin::Bevel,
+                    _ => tiny_skia::LineJoin::Miter,
+                },
+                miter: s.ml.filter(|m| m.is_finite() && *m >= 1.0).unwrap_or(4.0) as f32,
+                dashes,
+                dash_offset,
+            };
+            Shape::Stroke { paint, opacity, style }
+        }
+        "tm" => {
+            let m: schema::Modifier = from(item, ty, w);
+            Shape::Trim {
+                start: prop(m.s.as_ref(), 0.0, "trim start", w),
+                end: prop(m.e.as_ref(), 100.0, "trim end", w),
+                offset: prop(m.o.as_ref(), 0.0, "trim offset", w),
+                sequential: m.m == Some(2.0),
+            }
+        }
+        "rd" => {
+            let m: schema::Modifier = from(item, ty, w);
+            Shape::Round(prop(m.r.as_ref(), 0.0, "corner radius", w))
+        }
+        "mm" => {
+            let m: schema::Modifier = from(item, ty, w);
+            let mode = m.m.filter(|x| (1.0..=5.0).contains(x)).unwrap_or(1.0) as u8;
+            if mode != 1 {
+                let name = ["", "merge", "add", "subtract", "intersect", "exclude"][mode as usize];
+                w.add(format!(
+                    "merge paths mode '{name}' is not supported; the paths are combined without a boolean operation"
+                ));
+            }
+            Shape::Merge(mode)
+        }
+        "rp" => {
+            let m: schema::Modifier = from(item, ty, w);
+            let tr = m.tr.clone().unwrap_or_default();
+            Shape::Repeater {
+                copies: prop(m.c.as_ref(), 1.0, "repeater copies", w),
+                offset: prop(m.o.as_ref(), 0.0, "repeater offset", w),
+                transform: Transform::from_schema(Some(&tr), w),
+                start_opacity: prop(tr.so.as_ref(), 100.0, "repeater start opacity", w),
+                end_opacity: prop(tr.eo.as_ref(), 100.0, "repeater end opacity", w),
+                above: m.m != Some(2.0),
+            }
+        }
+        "tr" => return None,
+        "pb" => {
+            w.add("puker/bloat modifier (pb) is not supported; ignored");
+            return None;
+        }
+        "tw" => {
+            w.add("twist modifier (tw) is not supported; ignored");
+            return None;
+        }
+        "op" => {
+            w.add("offset path modifier (op) is not supported; ignored");
+            return None;
+        }
+        "zz" => {
+            w.add("zig-zag modifier (zz) is not supported; ignored");
+            return None;
+        }
+        other => {
+            w.add(format!("shape item type '{other}' is not supported; ignored"));
+            return None;
+        }
+    })
+}
+
+/// Mask combination mode.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MaskMode {
+    /// Union.
+    Add,
+    /// Subtract from what is there.
+    Subtract,
+    /// Intersect.
+    Intersect,
+    /// Maximum.
+    Lighten,
+    /// Minimum.
+    Darken,
+    /// Absolute difference.
+    Difference,
+    /// Disabled.
+    None,
+}
+
+/// A layer mask.
+#[derive(Clone, Debug)]
+pub struct Mask {
+    /// Mode.
+    pub mode: MaskMode,
+    /// Inverted.
+    pub inverted: bool,
+    /// The path (layer space).
+    pub path: Value<Bez>,
+    /// Opacity in percent.
+    pub opacity: Value<f32>,
+    /// Expansion in pixels.
+    pub expansion: Value<f32>,
+}
+
+/// Track matte mode.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MatteMode {
+    /// Visible where the matte is opaque.
+    Alpha,
+    /// Visible where the matte is transparent.
+    AlphaInverted,
+    /// Visible by the matte's luminance.
+    Luma,
+    /// Visible by the inverse of the matte's luminance.
+    LumaInverted,
+}
+
+/// What a layer draws.
+#[derive(Clone, Debug)]
+pub enum Content {
+    /// Shapes (ty 4).
+    Shapes(Vec<Shape>),
+    /// A solid rectangle (ty 1).
+    Solid {
+        /// Color.
+        color: [f32; 4],
+        /// Width.
+        width: f32,
+        /// Height.
+        height: f32,
+    },
+    /// A precomposition (ty 0).
+    Precomp {
+        /// Index into [`Model::comps`].
+        comp: usize,
+        /// Clip width.
+        width: f32,
+        /// Clip height.
+        height: f32,
+    },
+    /// Null (ty 3) and everything that draws nothing.
+    Nothing,
+}
+
+/// A layer.
+#[derive(Clone, Debug)]
+pub struct Layer {
+    /// Name.
+    pub name: String,
+    /// Lottie type number.
+    pub ty: i64,
+    /// `ind`.
+    pub ind: Option<i64>,
+    /// Position of the parent layer in the same composition.
+    pub parent: Option<usize>,
+    /// In point.
+    pub ip: f32,
+    /// Out point.
+    pub op: f32,
+    /// Start time.
+    pub st: f32,
+    /// Time stretch.
+    pub sr: f32,
+    /// Hidden.
+    pub hidden: bool,
+    /// Transform.
+    pub transform: Transform,
+    /// Masks.
+    pub masks: Vec<Mask>,
+    /// Track matte: mode and position of the source layer in the same composition.
+    pub matte: Option<(MatteMode, usize)>,
+    /// True when this layer is a matte source (`td`), not drawn itself.
+    pub is_matte_source: bool,
+    /// Time remap in seconds (precomps).
+    pub time_remap: Option<Value<f32>>,
+    /// What it draws.
+    pub content: Content,
+    /// Problems found in this layer.
+    pub warnings: Vec<String>,
+}
+
+impl Layer {
+    /// The time at which the layer's own properties are evaluated for composition time `t`.
+    /// Keyframe times are stored in the time of the containing composition (Bodymovin, and
+    /// lottie-web / ThorVG, do not shift them by `st`), so this is `t` itself.
+    pub fn local_time(&self, t: f32) -> f32 {
+        t
+    }
+
+    /// The time inside a precomp layer's content for composition time `t`: `(t − st) / sr`.
+    pub fn inner_time(&self, t: f32) -> f32 {
+        (t - self.st) / self.sr
+    }
+
+    /// True when the layer is drawn at composition time `t`.
+    pub fn active(&self, t: f32) -> bool {
+        t >= self.ip && t < self.op
+    }
+}
+
+/// A composition: the root or a precomp asset.
+#[derive(Clone, Debug, Default)]
+pub struct Composition {
+    /// The layers, top-most first.
+    pub layers: Vec<Layer>,
+}
+
+/// The whole animation.
+#[derive(Clone, Debug)]
+pub struct Model {
+    /// Canvas width.
+    pub width: f32,
+    /// Canvas height.
+    pub height: f32,
+    /// Frame rate.
+    pub fps: f32,
+    /// First frame.
+    pub ip: f32,
+    /// Frame after the last.
+    pub op: f32,
+    /// `comps[0]` is the root; the rest are precomp assets.
+    pub comps: Vec<Composition>,
+    /// File-level warnings.
+    pub warnings: Vec<String>,
+}
+
+fn solid_color(sc: Option<&str>) -> Option<[f32; 4]> {
+    let s = sc?.trim().trim_start_matches('#');
+    if s.len() < 6 || !s.is_ascii() {
+        return None;
+    }
+    let c = |i: usize| u8::from_str_radix(&s[i..i + 2], 16).ok().map(|v| v as f32 / 255.0);
+    Some([c(0)?, c(2)?, c(4)?, 1.0])
+}
+
+struct Builder<'a> {
+    asset_ids: HashMap<String, usize>,
+    assets: &'a [schema::Asset],
+    comps: Vec<Option<Composition>>,
+    warnings: Vec<String>,
+}
+
+impl Builder<'_> {
+    fn comp(&mut self, layers: &[schema::Layer], depth: usize) -> Composition {
+        let mut out: Vec<Layer> = layers.iter().map(|l| self.layer(l, depth)).collect();
+        // Parents by `ind`, in any order.
+        let by_ind: HashMap<i64, usize> = out.iter().enumerate().filter_map(|(i, l)| l.ind.map(|x| (x, i))).collect();
+        for (i, src) in layers.iter().enumerate() {
+            if let Some(p) = src.parent {
+                match by_ind.get(&(p as i64)) {
+                    Some(&pi) if pi != i => out[i].parent = Some(pi),
+                    _ => {
+                        let msg = format!("layer '{}': parent {} does not exist; ignored", out[i].name, p);
+                        log::warn!("{msg}");
+                        out[i].warnings.push(msg);
+                    }
+                }
+            }
+        }
+        // Break parent cycles.
+        for i in 0..out.len() {
+            let mut seen = 0;
+            let mut cur = out[i].parent;
+            while let Some(c) = cur {
+                seen += 1;
+                if seen > out.len() {
+                    let msg = format!("layer '{}': parenting cycle; parent ignored", out[i].name);
+                    log::warn!("{msg}");
+                    out[i].warnings.push(msg);
+                    out[i].parent = None;
+                    break;
+                }
+                cur = out[c].parent;
+            }
+        }
+        // Track mattes: `tp` names the source by `ind`; otherwise the layer right above.
+        for (i, src) in layers.iter().enumerate() {
+            let Some(tt) = src.tt.filter(|t| *t != 0.0) else { continue };
+            let mode = match tt as i64 {
+                1 => MatteMode::Alpha,
+                2 => MatteMode::AlphaInverted,
+                3 => MatteMode::Luma,
+                4 => MatteMode::LumaInverted,
+                other => {
+                    let msg = format!("layer '{}': track matte mode {} is not supported; ignored", out[i].name, other);
+                    log::warn!("{msg}");
+                    out[i].warnings.push(msg);
+                    continue;
+                }
+            };
+            let source = match src.tp {
+                Some(tp) => by_ind.get(&(tp as i64)).copied(),
+                None => (i > 0).then(|| i - 1),
+            };
+            match source {
+                Some(s) if s != i => {
+                    out[i].matte = Some((mode, s));
+                    out[s].is_matte_source = true;
+                }
+                _ => {
+                    let msg = format!("layer '{}': its track matte layer does not exist; matte ignored", out[i].name);
+                    log::warn!("{msg}");
+                    out[i].warnings.push(msg);
+                }
+            }
+        }
+        for (i, src) in layers.iter().enumerate() {
+            if src.td.is_some_and(|t| t != 0.0) {
+                out[i].is_matte_source = true;
+            }
+        }
+        Composition { layers: out }
+    }
+
+    fn asset(&mut self, id: &str, depth: usize, w: &mut Warn) -> Option<usize> {
+        let Some(&idx) = self.asset_ids.get(id) else {
+            w.add(format!("precomp asset '{id}' does not exist; layer draws nothing"));
+            return None;
+        };
+        let comp_index = idx + 1;
+        if self.comps[comp_index].is_some() {
+            return Some(comp_index);
+        }
+        if depth >= MAX_DEPTH {
+            w.add(format!("precomps nested deeper than {MAX_DEPTH} (or a reference cycle); '{id}' not drawn"));
+            return None;
+        }
+        let Some(layers) = self.assets[idx].layers.as_ref() else {
+            w.add(format!("asset '{id}' is an image; image layers are not supported"));
+            return None;
+        };
+        // Mark as in progress (empty) so that a cycle terminates.
+        self.comps[comp_index] = Some(Composition::default());
+        let comp = self.comp(layers, depth + 1);
+        self.comps[comp_index] = Some(comp);
+        Some(comp_index)
+    }
+
+    fn layer(&mut self, l: &schema::Layer, depth: usize) -> Layer {
+        let ty = l.ty.filter(|t| t.is_finite()).map(|t| t as i64).unwrap_or(-1);
+        let name = l.nm.clone().unwrap_or_else(|| format!("layer {}", l.ind.map(|i| i as i64).unwrap_or(0)));
+        let mut warnings = Vec::new();
+        let mut w = Warn { layer: &name, out: &mut warnings };
+        if l.ddd.is_some_and(|d| d != 0.0) {
+            w.add("3D layers are not supported; drawn flat");
+        }
+        if l.ao.is_some_and(|a| a != 0.0) {
+            w.add("auto-orient is not supported; ignored");
+        }
+        if l.bm.is_some_and(|b| b != 0.0) {
+            w.add("blend modes are not supported; drawn as normal");
+        }
+        if l.ef.as_ref().is_some_and(|e| e.as_array().is_some_and(|a| !a.is_empty())) {
+            w.add("effects are not supported; ignored");
+        }
+        if l.sy.as_ref().is_some_and(|e| e.as_array().is_some_and(|a| !a.is_empty())) {
+            w.add("layer styles are not supported; ignored");
+        }
+        let transform = Transform::from_schema(l.ks.as_ref(), &mut w);
+        let mut masks = Vec::new();
+        for m in l.masksProperties.iter().flatten() {
+            let mode = match m.mode.as_deref() {
+                Some("a") | None => MaskMode::Add,
+                Some("s") => MaskMode::Subtract,
+                Some("i") => MaskMode::Intersect,
+                Some("l") => MaskMode::Lighten,
+                Some("d") => MaskMode::Darken,
+                Some("f") => MaskMode::Difference,
+                Some("n") => MaskMode::None,
+                Some(other) => {
+                    w.add(format!("mask mode '{other}' is not supported; treated as add"));
+                    MaskMode::Add
+                }
+            };
+            masks.push(Mask {
+                mode,
+                inverted: m.inv,
+                path: prop(m.pt.as_ref(), Bez::default(), "mask path", &mut w),
+                opacity: prop(m.o.as_ref(), 100.0, "mask opacity", &mut w),
+                expansion: prop(m.x.as_ref(), 0.0, "mask expansion", &mut w),
+            });
+        }
+        let mut time_remap = None;
+        let content = match ty {
+            0 => {
+                let comp = match l.refId.as_deref() {
+                    Some(id) => self.asset(id, depth, &mut w),
+                    None => {
+                        w.add("precomp layer without refId; draws nothing");
+                        None
+                    }
+                };
+                if l.tm.is_some() {
+                    time_remap = Some(prop(l.tm.as_ref(), 0.0, "time remap", &mut w));
+                }
+                match comp {
+                    Some(comp) => Content::Precomp {
+                        comp,
+                        width: l.w.unwrap_or(f64::INFINITY) as f32,
+                        height: l.h.unwrap_or(f64::INFINITY) as f32,
+                    },
+                    None => Content::Nothing,
+                }
+            }
+            1 => {
+                let color = solid_color(l.sc.as_deref()).unwrap_or_else(|| {
+                    w.add("solid color missing or malformed; using black");
+                    [0.0, 0.0, 0.0, 1.0]
+                });
+                Content::Solid { color, width: l.sw.unwrap_or(0.0) as f32, height: l.sh.unwrap_or(0.0) as f32 }
+            }
+            2 => {
+                w.add("image layers are not supported; nothing drawn");
+                Content::Nothing
+            }
+            3 => Content::Nothing,
+            4 => Content::Shapes(parse_shapes(l.shapes.as_deref().unwrap_or(&[]), &mut w, 0)),
+            5 => {
+                w.add("text layers are not supported; nothing drawn");
+                Content::Nothing
+            }
+            other => {
+                w.add(format!("layer type {other} is not supported; nothing drawn"));
+                Content::Nothing
+            }
+        };
+        let finite = |v: Option<f64>, d: f32| v.map(|x| x as f32).filter(|x| x.is_finite()).unwrap_or(d);
+        let sr = finite(l.sr, 1.0);
+        Layer {
+            ind: l.ind.filter(|x| x.is_finite()).map(|x| x as i64),
+            parent: None,
+            ip: finite(l.ip, f32::NEG_INFINITY),
+            op: finite(l.op, f32::INFINITY),
+            st: finite(l.st, 0.0),
+            sr: if sr == 0.0 { 1.0 } else { sr },
+            hidden: l.hd,
+            transform,
+            masks,
+            matte: None,
+            is_matte_source: false,
+            time_remap,
+            content,
+            ty,
+            name,
+            warnings,
+        }
+    }
+}
+
+/// Builds the model from the parsed schema. `w`, `h`, `fr`, `ip`, `op` must be validated by
+/// the caller.
+pub fn build(root: &schema::Root, width: f32, height: f32, fps: f32, ip: f32, op: f32) -> Model {
+    let mut asset_ids = HashMap::new();
+    for (i, a) in root.assets.iter().enumerate() {
+        if let Some(id) = &a.id {
+            asset_ids.entry(id.clone()).or_insert(i);
+        }
+    }
+    let mut b = Builder {
+        asset_ids,
+        assets: &root.assets,
+        comps: (0..=root.assets.len()).map(|_| None).collect(),
+        warnings: Vec::new(),
+    };
+    let rootc = b.comp(root.layers.as_deref().unwrap_or(&[]), 0);
+    if root.chars.as_ref().is_some_and(|c| c.as_array().is_some_and(|a| !a.is_empty())) {
+        b.warnings.push("the file embeds glyphs (chars) for text; text is not supported".into());
+    }
+    if root.ddd.is_some_and(|d| d != 0.0) {
+        b.warnings.push("3D composition (ddd) is not supported; drawn flat".into());
+    }
+    let mut comps: Vec<Composition> = b.comps.into_iter().map(Option::unwrap_or_default).collect();
+    comps[0] = rootc;
+    Model { width, height, fps, ip, op, comps, warnings: b.warnings }
+}

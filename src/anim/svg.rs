@@ -1,0 +1,313 @@
+//! SVG frame sequences: a directory (or `dir/*.svg` glob) of SVG files, one per frame,
+//! sorted naturally and all of the same size, rendered with usvg/resvg.
+//!
+//! **Layers.** Each top-level `<g>` of the root `<svg>` is a layer, named by its
+//! `inkscape:label` when it has one (Inkscape also gives every layer an automatic `id` such as
+//! `layer1`, so the label is the name the designer chose), else by its `id`, else
+//! `layer N` (N = its position among the top-level groups that have neither, from 1, so that
+//! named groups coming and going do not renumber it). Top-level shapes outside
+//! any group (`path`, `rect`, `circle`, `text`, `use`, …) are gathered into **one** region
+//! named `root`, drawn in document order, because a stray shape rarely deserves a layer of
+//! its own and frame-to-frame identity of unnamed shapes is not knowable. `defs`, `style`,
+//! metadata and similar are not layers.
+//!
+//! **Identity across frames** is by name: a layer keeps its region wherever it appears in the
+//! sequence, and is invisible (empty) in frames that lack it. Its `visible` range runs from the
+//! first to the last frame that has it. Regions are ordered top-most first (SVG draws later
+//! elements on top), merging the orders seen in the frames.
+//!
+//! **Rendering.** A layer is rendered by hiding every other top-level element (wrapping it in
+//! `<g display="none">`, so definitions inside it stay usable) and letting resvg draw the
+//! document twice: fills only (an injected `stroke: none !important` style) into
+//! [`RegionFrame::fill`], and, for layers that set a stroke, strokes only (`fill: none
+//! !important`) into [`RegionFrame::strokes`]. (Content inside `<mask>` elements is affected
+//! by those styles too.) Text is drawn only if fonts are available to usvg, which they are not
+//! by default: a warning says so. Frame rate: 24 fps (SVG files carry none).
+
+use super::{Animation, LoadOptions, MAX_FRAMES, MAX_SIDE, Region, RegionFrame, RegionKind, RegionRenderer};
+use crate::error::{Error, Result};
+use std::collections::HashMap;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use usvg::roxmltree;
+
+const INKSCAPE_NS: &str = "http://www.inkscape.org/namespaces/inkscape";
+/// Name of the region that gathers top-level shapes outside any group.
+pub const ROOT_LAYER: &str = "root";
+
+fn is_shape(tag: &str) -> bool {
+    matches!(
+        tag,
+        "path"
+            | "rect"
+            | "circle"
+            | "ellipse"
+            | "line"
+            | "polyline"
+            | "polygon"
+            | "text"
+            | "use"
+            | "image"
+            | "switch"
+            | "a"
+    )
+}
+
+/// A top-level element of one frame: its layer name and byte range in the file.
+#[derive(Clone, Debug)]
+struct TopLevel {
+    name: String,
+    range: Range<usize>,
+    /// Something inside sets a stroke other than `none`.
+    strokes: bool,
+}
+
+/// Injected style sheets (usvg honours `!important` over the file's own styles) that draw
+/// only the fills, or only the strokes.
+const FILLS_ONLY: &str = "* { stroke: none !important; }";
+const STROKES_ONLY: &str = "* { fill: none !important; }";
+
+fn sets_stroke(node: roxmltree::Node) -> bool {
+    node.descendants().filter(|n| n.is_element()).any(|n| {
+        let attr = n.attribute("stroke").is_some_and(|v| v.trim() != "none");
+        let style = n.attribute("style").is_some_and(|st| {
+            st.split(';').any(|decl| {
+                let mut kv = decl.splitn(2, ':');
+                let (k, v) = (kv.next().unwrap_or("").trim(), kv.next().unwrap_or("").trim());
+                k == "stroke" && v != "none" && !v.is_empty()
+            })
+        });
+        attr || style
+    })
+}
+
+fn parse_xml<'a>(path: &Path, text: &'a str) -> Result<roxmltree::Document<'a>> {
+    let opt = roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
+    roxmltree::Document::parse_with_options(text, opt).map_err(|e| {
+        let pos = e.pos();
+        Error::animation(path, format!("not valid SVG/XML at line {}, column {}: {}", pos.row, pos.col, e))
+    })
+}
+
+/// The layers of one frame, bottom first.
+fn top_level(path: &Path, text: &str) -> Result<(Vec<TopLevel>, bool)> {
+    let doc = parse_xml(path, text)?;
+    let root = doc.root_element();
+    if root.tag_name().name() != "svg" {
+        return Err(Error::animation(path, "the root element is not <svg>"));
+    }
+    let mut out = Vec::new();
+    let mut groups = 0;
+    let mut has_text = false;
+    for node in root.descendants() {
+        if node.is_element() && node.tag_name().name() == "text" {
+            has_text = true;
+        }
+    }
+    for child in root.children().filter(|c| c.is_element()) {
+        let tag = child.tag_name().name();
+        let name = if tag == "g" {
+            let named = child
+                .attribute((INKSCAPE_NS, "label"))
+                .or_else(|| child.attribute("id"))
+                .map(str::to_string)
+                .filter(|s| !s.trim().is_empty());
+            named.unwrap_or_else(|| {
+                groups += 1;
+                format!("layer {groups}")
+            })
+        } else if is_shape(tag) {
+            ROOT_LAYER.to_string()
+        } else {
+            continue;
+        };
+        out.push(TopLevel { name, range: child.range(), strokes: sets_stroke(child) });
+    }
+    Ok((out, has_text))
+}
+
+/// The document with every top-level element not named `keep` hidden.
+fn isolate(text: &str, layers: &[TopLevel], keep: &str) -> String {
+    let mut out = String::with_capacity(text.len() + layers.len() * 32);
+    let mut pos = 0;
+    for l in layers {
+        if l.name == keep {
+            continue;
+        }
+        out.push_str(&text[pos..l.range.start]);
+        out.push_str("<g display=\"none\">");
+        out.push_str(&text[l.range.clone()]);
+        out.push_str("</g>");
+        pos = l.range.end;
+    }
+    out.push_str(&text[pos..]);
+    out
+}
+
+struct SvgSequence {
+    files: Vec<PathBuf>,
+    names: Vec<String>,
+    strokes: Vec<bool>,
+    width: u32,
+    height: u32,
+    scale: (f32, f32),
+}
+
+impl RegionRenderer for SvgSequence {
+    fn render(&self, region: usize, frame: usize) -> Result<RegionFrame> {
+        let path = &self.files[frame];
+        let name = &self.names[region];
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let (layers, _) = top_level(path, &text)?;
+        let draw = |sheet: &str| -> Result<tiny_skia::Pixmap> {
+            let mut pm = tiny_skia::Pixmap::new(self.width, self.height)
+                .ok_or_else(|| Error::animation(path, "could not allocate the canvas"))?;
+            if layers.iter().any(|l| &l.name == name) {
+                let doc = isolate(&text, &layers, name);
+                let opt = usvg::Options {
+                    resources_dir: path.parent().map(Path::to_path_buf),
+                    style_sheet: Some(sheet.to_string()),
+                    ..Default::default()
+                };
+                let tree = usvg::Tree::from_str(&doc, &opt).map_err(|e| Error::animation(path, format!("SVG: {e}")))?;
+                let ts = tiny_skia::Transform::from_scale(self.scale.0, self.scale.1);
+                resvg::render(&tree, ts, &mut pm.as_mut());
+            }
+            Ok(pm)
+        };
+        let fill = super::lottie::to_plane(&draw(FILLS_ONLY)?);
+        let strokes = if self.strokes[region] {
+            let pm = draw(STROKES_ONLY)?;
+            pm.pixels().iter().any(|p| p.alpha() > 0).then(|| super::lottie::to_plane(&pm))
+        } else {
+            None
+        };
+        Ok(RegionFrame { fill, strokes })
+    }
+}
+
+/// Loads an SVG frame sequence.
+pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
+    let files = crate::seq::list_sequence(input, &["svg"])?;
+    if files.len() > MAX_FRAMES {
+        return Err(Error::Limit {
+            path: input.to_path_buf(),
+            what: "frame count".into(),
+            value: files.len() as f64,
+            limit: MAX_FRAMES as f64,
+        });
+    }
+    let opt = usvg::Options::default();
+    let mut size: Option<(f32, f32)> = None;
+    // Names in z-order (bottom first), merged over frames; per name, the frames having it.
+    let mut order: Vec<String> = Vec::new();
+    let mut frames_of: HashMap<String, Vec<usize>> = HashMap::new();
+    let mut stroked: Vec<String> = Vec::new();
+    let mut any_text = false;
+    for (f, path) in files.iter().enumerate() {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        if text.trim().is_empty() {
+            return Err(Error::Empty { path: path.clone(), what: "the SVG file is empty".into() });
+        }
+        let (layers, has_text) = top_level(path, &text)?;
+        any_text |= has_text;
+        let tree = usvg::Tree::from_str(&text, &opt).map_err(|e| Error::animation(path, format!("SVG: {e}")))?;
+        let s = (tree.size().width(), tree.size().height());
+        match size {
+            None => {
+                if s.0 > MAX_SIDE as f32 || s.1 > MAX_SIDE as f32 {
+                    return Err(Error::Limit {
+                        path: path.clone(),
+                        what: "canvas side".into(),
+                        value: s.0.max(s.1) as f64,
+                        limit: MAX_SIDE as f64,
+                    });
+                }
+                size = Some(s);
+            }
+            Some(first) if (first.0 - s.0).abs() > 0.5 || (first.1 - s.1).abs() > 0.5 => {
+                return Err(Error::SizeMismatch {
+                    path: path.clone(),
+                    expected: (first.0.round() as u32, first.1.round() as u32),
+                    found: (s.0.round() as u32, s.1.round() as u32),
+                });
+            }
+            Some(_) => {}
+        }
+        let mut prev: Option<usize> = None;
+        let mut seen_here: Vec<&str> = Vec::new();
+        for l in &layers {
+            if seen_here.contains(&l.name.as_str()) {
+                continue;
+            }
+            seen_here.push(&l.name);
+            if layers.iter().any(|x| x.name == l.name && x.strokes) && !stroked.contains(&l.name) {
+                stroked.push(l.name.clone());
+            }
+            let frames = frames_of.entry(l.name.clone()).or_default();
+            frames.push(f);
+            match order.iter().position(|n| n == &l.name) {
+                Some(i) => prev = Some(i),
+                None => {
+                    let at = prev.map_or(0, |p| p + 1);
+                    order.insert(at, l.name.clone());
+                    prev = Some(at);
+                }
+            }
+        }
+    }
+    let (w, h) = size.ok_or_else(|| Error::Empty { path: input.to_path_buf(), what: "no SVG frames".into() })?;
+    if order.is_empty() {
+        return Err(Error::Empty {
+            path: input.to_path_buf(),
+            what: "the SVG frames have no top-level groups or shapes to stylize".into(),
+        });
+    }
+    let width = ((w * options.scale).round() as u32).clamp(1, MAX_SIDE);
+    let height = ((h * options.scale).round() as u32).clamp(1, MAX_SIDE);
+    let mut warnings = Vec::new();
+    if any_text {
+        let msg = "SVG text is not rendered (no fonts are loaded); convert text to paths".to_string();
+        log::warn!("{}: {msg}", input.display());
+        warnings.push(msg);
+    }
+    let names: Vec<String> = order.into_iter().rev().collect();
+    let regions = names
+        .iter()
+        .enumerate()
+        .map(|(i, name)| {
+            let fr = &frames_of[name];
+            let visible = fr[0]..fr[fr.len() - 1] + 1;
+            let mut warnings = Vec::new();
+            if fr.len() < visible.len() {
+                warnings.push(format!("layer '{name}' is missing in {} frames of its range", visible.len() - fr.len()));
+            }
+            Region {
+                index: i + 1,
+                name: name.clone(),
+                kind: if name == ROOT_LAYER { RegionKind::SvgRoot } else { RegionKind::SvgGroup },
+                visible,
+                color: [1.0, 1.0, 1.0, 1.0],
+                has_strokes: stroked.contains(name),
+                warnings,
+            }
+        })
+        .collect::<Vec<_>>();
+    let frames = files.len();
+    let strokes = names.iter().map(|n| stroked.contains(n)).collect();
+    let renderer = SvgSequence { files, names, strokes, width, height, scale: (width as f32 / w, height as f32 / h) };
+    let mut anim =
+        Animation::new(input.to_path_buf(), width, height, 24.0, frames, regions, None, warnings, Box::new(renderer));
+    // Dominant colors from the first visible frame of each region.
+    for i in 0..anim.regions.len() {
+        let f = anim.regions[i].visible.start;
+        if let Ok(fr) = anim.render(i, f) {
+            let mut hist = super::ColorHistogram::default();
+            hist.add(&fr.fill);
+            if let Some(c) = hist.dominant() {
+                anim.regions[i].color = c;
+            }
+        }
+    }
+    Ok(anim)
+}

@@ -1,0 +1,71 @@
+//! `fluidymation inspect` as a user runs it.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_fluidymation"))
+}
+
+fn demo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/demo/waving.json")
+}
+
+#[test]
+fn inspect_lists_the_demo() {
+    let out = bin().arg("inspect").arg(demo()).output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("400x400 px, 24 fps, 48 frames (2.00 s)"), "{text}");
+    assert!(text.contains("background: #f3ede2 paper"), "{text}");
+    for name in ["01  arm", "02  head", "03  scarf", "04  dress", "05  legs"] {
+        assert!(text.contains(name), "{name} in {text}");
+    }
+    assert!(text.contains("#3366d9"), "dress color in {text}");
+}
+
+#[test]
+fn inspect_json_and_masks() {
+    let dir = std::env::temp_dir().join(format!("fm-cli-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = bin()
+        .args(["inspect", "--json", "--frames", "2..4", "--scale", "0.5", "--masks"])
+        .arg(&dir)
+        .arg(demo())
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["width"], 200);
+    assert_eq!(v["frames"], 48);
+    assert_eq!(v["regions"].as_array().unwrap().len(), 5);
+    assert_eq!(v["regions"][1]["has_strokes"], true);
+    assert!(v["regions"][3]["mean_coverage"].as_f64().unwrap() > 0.03);
+    // Frames 2..4 (1-based, inclusive) are written under their own numbers.
+    let files: Vec<String> = std::fs::read_dir(dir.join("04_dress"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect::<std::collections::BTreeSet<_>>()
+        .into_iter()
+        .collect();
+    assert_eq!(files, ["0002.png", "0003.png", "0004.png"]);
+    let img = image::open(dir.join("04_dress/0002.png")).unwrap().to_luma8();
+    assert_eq!(img.dimensions(), (200, 200));
+    assert_eq!(img.get_pixel(100, 120)[0], 255);
+    assert_eq!(img.get_pixel(5, 5)[0], 0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn errors_exit_1_with_the_reason() {
+    let bad = std::env::temp_dir().join(format!("fm-cli-bad-{}.json", std::process::id()));
+    std::fs::write(&bad, "{\"w\": 10,\n \"h\": }").unwrap();
+    let out = bin().arg("inspect").arg(&bad).output().unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("error:") && err.contains("line 2"), "{err}");
+    let out = bin().args(["inspect", "--frames", "50..60"]).arg(demo()).output().unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("only 48 frames"));
+    let _ = std::fs::remove_file(&bad);
+}

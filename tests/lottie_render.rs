@@ -1,0 +1,323 @@
+//! Properties of the Lottie reader that reference images cannot pin down: exact pixel counts
+//! on simple shapes, mask and matte modes, evaluated keyframes, region rules, errors.
+
+use fluidymation::Error;
+use fluidymation::anim::lottie::{self, render};
+use fluidymation::anim::{self, LoadOptions, RegionKind};
+use serde_json::{Value, json};
+use std::path::{Path, PathBuf};
+
+fn st(v: Value) -> Value {
+    json!({"a": 0, "k": v})
+}
+
+fn rect_layer(name: &str, ind: i64, x: f64, y: f64, w: f64, h: f64, color: [f64; 4]) -> Value {
+    json!({"ty": 4, "nm": name, "ind": ind, "ip": 0, "op": 10, "st": 0, "ks": {},
+           "shapes": [{"ty": "gr", "it": [
+               {"ty": "rc", "p": st(json!([x + w / 2.0, y + h / 2.0])), "s": st(json!([w, h])), "r": st(json!(0))},
+               {"ty": "fl", "c": st(json!(color)), "o": st(json!(100)), "r": 1},
+               {"ty": "tr", "p": st(json!([0, 0])), "a": st(json!([0, 0])), "s": st(json!([100, 100])),
+                "r": st(json!(0)), "o": st(json!(100))}]}]})
+}
+
+fn doc(layers: Vec<Value>) -> Value {
+    json!({"v": "5.7.1", "fr": 10, "ip": 0, "op": 10, "w": 40, "h": 40, "layers": layers})
+}
+
+fn model(d: &Value) -> lottie::model::Model {
+    lottie::parse(Path::new("test.json"), &d.to_string()).unwrap()
+}
+
+/// Alpha values of one root layer at `frame`, all passes.
+fn alpha(d: &Value, layer: usize, frame: f32) -> Vec<u8> {
+    let m = model(d);
+    let pm = render::render(&m, render::Target { layer, child: None }, frame, 40, 40, 1.0, render::Pass::All);
+    pm.pixels().iter().map(|p| p.alpha()).collect()
+}
+
+fn count(a: &[u8], v: u8) -> usize {
+    a.iter().filter(|&&x| x == v).count()
+}
+
+#[test]
+fn pixel_aligned_rect_covers_exactly_its_pixels() {
+    let d = doc(vec![rect_layer("r", 1, 10.0, 5.0, 10.0, 20.0, [1.0, 0.0, 0.0, 1.0])]);
+    let a = alpha(&d, 0, 0.0);
+    assert_eq!(count(&a, 255), 200);
+    assert_eq!(count(&a, 0), 1600 - 200);
+    assert_eq!(a[5 * 40 + 10], 255);
+    assert_eq!(a[4 * 40 + 10], 0);
+}
+
+fn with_masks(masks: Value) -> Value {
+    let mut l = rect_layer("m", 1, 0.0, 0.0, 40.0, 40.0, [0.0, 0.0, 1.0, 1.0]);
+    l["masksProperties"] = masks;
+    l["hasMask"] = json!(true);
+    doc(vec![l])
+}
+
+fn square(x: f64, y: f64, s: f64) -> Value {
+    json!({"c": true, "v": [[x, y], [x + s, y], [x + s, y + s], [x, y + s]], "i": [[0, 0], [0, 0], [0, 0], [0, 0]], "o": [[0, 0], [0, 0], [0, 0], [0, 0]]})
+}
+
+fn mask(mode: &str, inv: bool, o: f64, path: Value) -> Value {
+    json!({"mode": mode, "inv": inv, "o": st(json!(o)), "x": st(json!(0)), "pt": st(path)})
+}
+
+#[test]
+fn mask_modes_have_exact_areas() {
+    // A = [0,20)², B = [10,30)²; overlap 100 px.
+    let (a, b) = (square(0.0, 0.0, 20.0), square(10.0, 10.0, 20.0));
+    let cases = [
+        (vec![mask("a", false, 100.0, a.clone())], 400),
+        (vec![mask("a", false, 100.0, a.clone()), mask("a", false, 100.0, b.clone())], 700),
+        (vec![mask("a", false, 100.0, a.clone()), mask("s", false, 100.0, b.clone())], 300),
+        (vec![mask("a", false, 100.0, a.clone()), mask("i", false, 100.0, b.clone())], 100),
+        (vec![mask("a", false, 100.0, a.clone()), mask("f", false, 100.0, b.clone())], 600),
+        (vec![mask("a", false, 100.0, a.clone()), mask("l", false, 100.0, b.clone())], 700),
+        (vec![mask("a", false, 100.0, a.clone()), mask("d", false, 100.0, b.clone())], 100),
+        (vec![mask("a", true, 100.0, a.clone())], 1600 - 400),
+        (vec![mask("s", false, 100.0, a.clone())], 1600 - 400),
+        (vec![mask("a", false, 100.0, a.clone()), mask("n", false, 100.0, b.clone())], 400),
+    ];
+    for (i, (masks, expected)) in cases.into_iter().enumerate() {
+        let al = alpha(&with_masks(Value::Array(masks)), 0, 0.0);
+        assert_eq!(count(&al, 255), expected, "case {i}");
+        assert_eq!(count(&al, 0), 1600 - expected, "case {i}");
+    }
+    // Mask opacity scales coverage.
+    let al = alpha(&with_masks(json!([mask("a", false, 50.0, a.clone())])), 0, 0.0);
+    assert_eq!(al.iter().filter(|&&x| (126..=129).contains(&x)).count(), 400);
+    // Expansion grows the mask by about x pixels on every side.
+    let mut m = mask("a", false, 100.0, square(10.0, 10.0, 10.0));
+    m["x"] = st(json!(2));
+    let al = alpha(&with_masks(json!([m])), 0, 0.0);
+    let covered: f64 = al.iter().map(|&v| v as f64 / 255.0).sum();
+    assert!((covered - 14.0 * 14.0).abs() < 6.0, "{covered}");
+}
+
+#[test]
+fn track_mattes_alpha_luma_and_tp() {
+    let src = |color: [f64; 4]| {
+        let mut s = rect_layer("matte", 1, 0.0, 0.0, 20.0, 40.0, color);
+        s["td"] = json!(1);
+        s
+    };
+    let target = |tt: i64| {
+        let mut t = rect_layer("target", 2, 0.0, 0.0, 40.0, 40.0, [1.0, 0.0, 0.0, 1.0]);
+        t["tt"] = json!(tt);
+        t
+    };
+    for (tt, color, expected) in [
+        (1, [1.0, 1.0, 1.0, 1.0], 800),
+        (2, [1.0, 1.0, 1.0, 1.0], 800),
+        (3, [1.0, 1.0, 1.0, 1.0], 800),
+        (4, [1.0, 1.0, 1.0, 1.0], 800),
+        (3, [0.0, 0.0, 0.0, 1.0], 0),
+        (4, [0.0, 0.0, 0.0, 1.0], 1600),
+    ] {
+        let d = doc(vec![src(color), target(tt)]);
+        let a = alpha(&d, 1, 0.0);
+        assert_eq!(count(&a, 255), expected, "tt {tt} color {color:?}");
+    }
+    // `tp` names the matte by `ind`, even when it is not the layer right above.
+    let mut t = rect_layer("target", 3, 0.0, 0.0, 40.0, 40.0, [1.0, 0.0, 0.0, 1.0]);
+    t["tt"] = json!(1);
+    t["tp"] = json!(1);
+    let d = doc(vec![src([1.0; 4]), rect_layer("other", 2, 30.0, 30.0, 5.0, 5.0, [0.0, 1.0, 0.0, 1.0]), t]);
+    assert_eq!(count(&alpha(&d, 2, 0.0), 255), 800);
+    // The matte source is not a region; the other two are.
+    let a = anim_of(&d, &LoadOptions::default());
+    let names: Vec<&str> = a.regions.iter().map(|r| r.name.as_str()).collect();
+    assert_eq!(names, ["other", "target"]);
+}
+
+fn write_temp(name: &str, text: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("fm-lottie-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn anim_of(d: &Value, opts: &LoadOptions) -> anim::Animation {
+    let p = write_temp(&format!("a{}.json", rand_name(d)), &d.to_string());
+    anim::load(&p, opts).unwrap()
+}
+
+fn rand_name(d: &Value) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    d.to_string().hash(&mut h);
+    h.finish()
+}
+
+#[test]
+fn keyframes_evaluate_through_the_model() {
+    // Position: linear 0 → 30 over frames 0..10 (old `e` style), then hold.
+    let mut l = rect_layer("moving", 1, 0.0, 0.0, 10.0, 10.0, [1.0, 1.0, 1.0, 1.0]);
+    l["ks"] = json!({"p": {"k": [
+        {"t": 0, "s": [0, 0], "e": [30, 0], "i": {"x": 1, "y": 1}, "o": {"x": 0, "y": 0}},
+        {"t": 6, "s": [30, 0], "h": 1}, {"t": 8, "s": [0, 20]}]}});
+    let d = doc(vec![l]);
+    let m = model(&d);
+    let tr = &m.comps[0].layers[0].transform;
+    assert!((tr.position.evaluate(3.0).x - 15.0).abs() < 1e-3);
+    assert_eq!(tr.position.evaluate(7.0), glam::Vec2::new(30.0, 0.0));
+    assert_eq!(tr.position.evaluate(9.0), glam::Vec2::new(0.0, 20.0));
+    // And the rendering moves with it: at frame 3 the square spans x 15..25.
+    let a = alpha(&d, 0, 3.0);
+    assert_eq!(count(&a, 255), 100);
+    assert_eq!(a[5 * 40 + 15], 255);
+    assert_eq!(a[5 * 40 + 14], 0);
+}
+
+#[test]
+fn fills_and_strokes_are_separate() {
+    let mut l = rect_layer("outlined", 1, 10.0, 10.0, 20.0, 20.0, [0.0, 0.5, 0.0, 1.0]);
+    l["shapes"][0]["it"].as_array_mut().unwrap().insert(
+        1,
+        json!({"ty": "st", "c": st(json!([1, 0, 0, 1])), "o": st(json!(100)), "w": st(json!(4)), "lc": 1, "lj": 1}),
+    );
+    let a = anim_of(&doc(vec![l]), &LoadOptions::default());
+    assert!(a.regions[0].has_strokes);
+    let f = a.render(0, 0).unwrap();
+    let fill_px = f.fill.data().iter().filter(|c| c[3] > 0.99).count();
+    assert_eq!(fill_px, 400);
+    assert!(f.fill.data().iter().all(|c| c[3] == 0.0 || (c[1] - 0.5).abs() < 0.01), "fill keeps its color");
+    let strokes = f.strokes.expect("strokes plane");
+    let stroke_px = strokes.data().iter().filter(|c| c[3] > 0.99).count();
+    // A 4-px stroke centred on the 20×20 outline: 24² − 16² = 320 pixels.
+    assert_eq!(stroke_px, 320);
+    assert!((a.regions[0].color[1] - 0.5).abs() < 0.02, "dominant color is the fill");
+}
+
+#[test]
+fn regions_background_and_names() {
+    let bg = json!({"ty": 1, "nm": "paper", "ind": 9, "ip": 0, "op": 10, "st": 0, "ks": {},
+                    "sc": "#ff8000", "sw": 40, "sh": 40});
+    let null = json!({"ty": 3, "nm": "ctrl", "ind": 5, "ip": 0, "op": 10, "st": 0, "ks": {"p": st(json!([5, 0]))}});
+    let mut child = rect_layer("dup", 2, 0.0, 0.0, 5.0, 5.0, [0.0, 0.0, 0.0, 1.0]);
+    child["parent"] = json!(5);
+    child["ip"] = json!(2);
+    child["op"] = json!(7);
+    let mut hidden = rect_layer("hidden", 3, 0.0, 0.0, 5.0, 5.0, [0.0, 0.0, 0.0, 1.0]);
+    hidden["hd"] = json!(true);
+    let text = json!({"ty": 5, "nm": "title", "ind": 4, "ip": 0, "op": 10, "st": 0, "ks": {}});
+    let d = doc(vec![child, rect_layer("dup", 1, 0.0, 0.0, 5.0, 5.0, [0.0; 4]), hidden, text, null, bg]);
+    let a = anim_of(&d, &LoadOptions::default());
+    let names: Vec<&str> = a.regions.iter().map(|r| r.name.as_str()).collect();
+    assert_eq!(names, ["dup", "dup (2)"]);
+    assert_eq!(a.regions[0].index, 1);
+    assert_eq!(a.regions[0].visible, 2..7);
+    let bg = a.background.as_ref().expect("background");
+    assert_eq!(bg.name, "paper");
+    assert!((bg.color[0] - 1.0).abs() < 1e-6 && (bg.color[1] - 128.0 / 255.0).abs() < 1e-6);
+    assert!(a.warnings.iter().any(|w| w.contains("title") && w.contains("text")), "{:?}", a.warnings);
+    // The parent null moves the child by 5 px.
+    let f = a.render(0, 3).unwrap();
+    assert!(f.fill.get(6, 2)[3] > 0.99 && f.fill.get(4, 2)[3] == 0.0);
+}
+
+#[test]
+fn split_precomps_and_time_remap() {
+    let inner = |name: &str, ind: i64, x: f64| rect_layer(name, ind, x, 0.0, 10.0, 10.0, [0.0, 0.0, 1.0, 1.0]);
+    let d = json!({"v": "5.7.1", "fr": 10, "ip": 0, "op": 10, "w": 40, "h": 40,
+        "assets": [{"id": "c", "layers": [inner("a", 1, 0.0), inner("b", 2, 20.0)]}],
+        "layers": [
+            {"ty": 0, "nm": "pre", "ind": 1, "refId": "c", "w": 40, "h": 40, "ip": 0, "op": 10, "st": 0, "ks": {}},
+            {"ty": 0, "nm": "again", "ind": 2, "refId": "c", "w": 15, "h": 40, "ip": 0, "op": 10, "st": 0, "ks": {},
+             "tm": {"a": 1, "k": [{"t": 0, "s": [0.5], "i": {"x": 1, "y": 1}, "o": {"x": 0, "y": 0}}, {"t": 10, "s": [0.5]}]}}]});
+    let a = anim_of(&d, &LoadOptions::default());
+    assert_eq!(a.regions.len(), 2);
+    assert_eq!(a.regions[0].kind, RegionKind::Precomp);
+    // The second use is clipped to its 15-px width: only "a" shows (100 px).
+    let f = a.render(1, 0).unwrap();
+    assert_eq!(f.fill.data().iter().filter(|c| c[3] > 0.99).count(), 100);
+    let s = anim_of(&d, &LoadOptions { split_precomps: true, ..Default::default() });
+    let names: Vec<&str> = s.regions.iter().map(|r| r.name.as_str()).collect();
+    assert_eq!(names, ["pre/a", "pre/b", "again/a", "again/b"]);
+    assert!(s.regions.iter().all(|r| r.kind == RegionKind::PrecompChild));
+    let f = s.render(1, 0).unwrap();
+    assert_eq!(f.fill.data().iter().filter(|c| c[3] > 0.99).count(), 100);
+    assert!(f.fill.get(25, 5)[3] > 0.99);
+}
+
+#[test]
+fn scale_option_scales_the_canvas() {
+    let d = doc(vec![rect_layer("r", 1, 10.0, 10.0, 10.0, 10.0, [1.0; 4])]);
+    let a = anim_of(&d, &LoadOptions { scale: 0.5, ..Default::default() });
+    assert_eq!((a.width, a.height), (20, 20));
+    let f = a.render(0, 0).unwrap();
+    assert_eq!(f.fill.data().iter().filter(|c| c[3] > 0.99).count(), 25);
+}
+
+fn load_err(text: &str) -> Error {
+    let p = write_temp(&format!("e{}.json", rand_name(&json!(text))), text);
+    anim::load(&p, &LoadOptions::default()).unwrap_err()
+}
+
+#[test]
+fn errors_name_the_problem() {
+    match load_err("{\n  \"w\": 10,\n  \"h\": 10 oops\n}") {
+        Error::Json { line, column, .. } => assert_eq!((line, column), (3, 11)),
+        e => panic!("{e}"),
+    }
+    let msg = |t: &str| load_err(t).to_string();
+    assert!(msg(r#"{"h": 10, "fr": 30, "op": 10, "layers": []}"#).contains("missing 'w'"));
+    assert!(msg(r#"{"w": 10, "h": 10, "op": 10, "layers": []}"#).contains("missing 'fr'"));
+    assert!(msg(r#"{"w": 10, "h": 10, "fr": 30, "layers": []}"#).contains("missing 'op'"));
+    assert!(msg(r#"{"w": 10, "h": 10, "fr": 30, "op": 10}"#).contains("missing 'layers'"));
+    assert!(msg(r#"{"w": 20000, "h": 10, "fr": 30, "op": 10, "layers": []}"#).contains("at most 16384"));
+    assert!(msg(r#"{"w": 10, "h": 10, "fr": 30, "ip": 0, "op": 200000, "layers": []}"#).contains("at most 100000"));
+    assert!(msg(r#"{"w": 10, "h": 10, "fr": 30, "ip": 5, "op": 5, "layers": []}"#).contains("no frames"));
+    assert!(msg(r#"{"w": 10, "h": 10, "fr": -1, "op": 5, "layers": []}"#).contains("positive"));
+    assert!(msg(r#"{"w": 10, "h": 10, "fr": 30, "op": 5, "layers": []}"#).contains("no layers"));
+    assert!(matches!(load_err("   "), Error::Empty { .. }));
+    assert!(msg(r#"{"w": 1e999}"#).contains("line 1"));
+    assert!(matches!(load_err(r#"{"w": NaN, "h": 10}"#), Error::Json { line: 1, column: 7, .. }));
+    assert!(msg(r#"{"w": 1e300, "h": 10, "fr": 30, "op": 5, "layers": []}"#).contains("canvas width"));
+    assert!(msg(r#"{"w": 10, "h": 10, "fr": 1e300, "op": 5, "layers": []}"#).contains("frame rate"));
+    assert!(msg(r#"{"w": 10, "h": -3, "fr": 30, "op": 5, "layers": []}"#).contains("at least 1 pixel"));
+    let missing = anim::load(Path::new("/nonexistent/x.json"), &LoadOptions::default()).unwrap_err();
+    assert!(missing.to_string().contains("/nonexistent/x.json"));
+}
+
+#[test]
+fn unsupported_features_warn_with_layer_name() {
+    let mut l = rect_layer("fancy", 1, 0.0, 0.0, 10.0, 10.0, [1.0; 4]);
+    l["ef"] = json!([{"ty": 5}]);
+    l["ks"] = json!({"r": {"a": 0, "k": 10, "x": "time * 30"}});
+    l["shapes"].as_array_mut().unwrap().push(json!({"ty": "pb", "a": st(json!(10))}));
+    let a = anim_of(&doc(vec![l]), &LoadOptions::default());
+    let w = &a.regions[0].warnings;
+    for feature in ["effects", "expressions", "puker/bloat"] {
+        assert!(w.iter().any(|x| x.contains(feature) && x.contains("'fancy'")), "{feature}: {w:?}");
+    }
+}
+
+#[test]
+fn exponential_precomp_reuse_is_bounded() {
+    // Ten nested levels, each using the next one ten times: 10^10 draws if unbounded.
+    let mut assets = Vec::new();
+    for level in 0..10 {
+        let layers: Vec<Value> = if level == 9 {
+            vec![rect_layer("leaf", 1, 0.0, 0.0, 2.0, 2.0, [1.0; 4])]
+        } else {
+            (0..10)
+                .map(|i| {
+                    json!({"ty": 0, "nm": format!("use {i}"), "ind": i + 1, "refId": format!("c{}", level + 1),
+                               "w": 40, "h": 40, "ip": 0, "op": 10, "st": 0, "ks": {}})
+                })
+                .collect()
+        };
+        assets.push(json!({"id": format!("c{level}"), "layers": layers}));
+    }
+    let d = json!({"v": "5.7.1", "fr": 10, "ip": 0, "op": 10, "w": 40, "h": 40, "assets": assets,
+        "layers": [{"ty": 0, "nm": "top", "ind": 1, "refId": "c0", "w": 40, "h": 40, "ip": 0, "op": 10, "st": 0, "ks": {}}]});
+    let start = std::time::Instant::now();
+    let a = anim_of(&d, &LoadOptions::default());
+    let f = a.render(0, 0).unwrap();
+    assert!(f.fill.get(0, 0)[3] > 0.99);
+    assert!(start.elapsed().as_secs() < 20, "{:?}", start.elapsed());
+}

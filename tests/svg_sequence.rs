@@ -1,0 +1,97 @@
+//! SVG frame sequences: layers from top-level groups, identity by name, sizes, errors.
+
+use fluidymation::Error;
+use fluidymation::anim::{self, LoadOptions, RegionKind};
+use std::path::PathBuf;
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("fm-svg-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn frame(body: &str, w: u32, h: u32) -> String {
+    format!(
+        r#"<svg xmlns="http://www.w3.org/2000/svg" xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape" width="{w}" height="{h}" viewBox="0 0 {w} {h}">{body}</svg>"#
+    )
+}
+
+#[test]
+fn groups_are_layers_named_and_tracked_by_name() {
+    let d = dir("layers");
+    for i in 1..=10 {
+        let x = i * 2;
+        let mut body = format!(
+            r##"<defs><linearGradient id="g"><stop offset="0" stop-color="#00f"/></linearGradient></defs>
+            <g id="layer1" inkscape:label="Body"><rect x="{x}" y="10" width="10" height="10" fill="#ff0000"/></g>
+            <rect x="0" y="30" width="4" height="4" fill="#000"/>"##
+        );
+        if i != 5 {
+            body.push_str(r##"<g id="arm"><rect x="30" y="0" width="5" height="20" fill="url(#g)"/></g>"##);
+        }
+        body.push_str(r##"<g><circle cx="5" cy="5" r="3" fill="#0f0" stroke="#000"/></g>"##);
+        // frame10 must sort after frame9 (natural order).
+        std::fs::write(d.join(format!("frame{i}.svg")), frame(&body, 40, 40)).unwrap();
+    }
+    let a = anim::load(&d, &LoadOptions::default()).unwrap();
+    assert_eq!((a.width, a.height, a.frames), (40, 40, 10));
+    let names: Vec<&str> = a.regions.iter().map(|r| r.name.as_str()).collect();
+    // Top-most first: the last group in the document first.
+    assert_eq!(names, ["layer 1", "arm", "root", "Body"]);
+    assert_eq!(a.regions[2].kind, RegionKind::SvgRoot);
+    assert_eq!(a.regions[3].kind, RegionKind::SvgGroup);
+    // Body: 100 px, red, moving right by 2 px a frame in natural file order.
+    let body = a.find_region("Body").unwrap();
+    assert!((a.regions[body].color[0] - 1.0).abs() < 0.01 && a.regions[body].color[1] < 0.01);
+    for f in [0, 8, 9] {
+        let fr = a.render(body, f).unwrap();
+        assert_eq!(fr.fill.data().iter().filter(|c| c[3] > 0.99).count(), 100);
+        let x = (f + 1) * 2;
+        assert!(fr.fill.get(x, 10)[3] > 0.99 && fr.fill.get(x - 1, 10)[3] < 0.01, "frame {f}");
+    }
+    // The arm is missing in the 5th file: empty there, and warned about.
+    let arm = a.find_region("arm").unwrap();
+    assert_eq!(a.regions[arm].visible, 0..10);
+    assert!(!a.regions[arm].warnings.is_empty());
+    assert_eq!(a.render(arm, 4).unwrap().fill.data().iter().filter(|c| c[3] > 0.0).count(), 0);
+    assert_eq!(a.render(arm, 3).unwrap().fill.data().iter().filter(|c| c[3] > 0.99).count(), 100);
+    // Root shapes outside groups: the 4×4 square.
+    let root = a.find_region("root").unwrap();
+    assert_eq!(a.render(root, 0).unwrap().fill.data().iter().filter(|c| c[3] > 0.99).count(), 16);
+    // Fills and strokes apart: the stroked circle of the unnamed group.
+    let circle = a.find_region("layer 1").unwrap();
+    assert!(a.regions[circle].has_strokes && !a.regions[body].has_strokes);
+    let fr = a.render(circle, 0).unwrap();
+    let strokes = fr.strokes.expect("stroke plane");
+    assert!(fr.fill.get(5, 5)[3] > 0.99 && fr.fill.get(5, 5)[1] > 0.99, "green fill inside");
+    assert!(fr.fill.get(5, 1)[3] < 0.5, "no stroke in the fill plane");
+    assert!(strokes.get(5, 2)[3] > 0.4 && strokes.get(5, 5)[3] == 0.0, "ring only");
+    assert!(a.render(body, 0).unwrap().strokes.is_none());
+    // A glob selects the same files.
+    let g = anim::load(&d.join("frame*.svg"), &LoadOptions { scale: 0.5, ..Default::default() }).unwrap();
+    assert_eq!((g.width, g.height, g.frames), (20, 20, 10));
+}
+
+#[test]
+fn mismatched_sizes_and_bad_files_are_errors() {
+    let d = dir("sizes");
+    std::fs::write(d.join("a1.svg"), frame("<g id='x'><rect width='5' height='5'/></g>", 40, 40)).unwrap();
+    std::fs::write(d.join("a2.svg"), frame("<g id='x'><rect width='5' height='5'/></g>", 50, 40)).unwrap();
+    match anim::load(&d, &LoadOptions::default()).unwrap_err() {
+        Error::SizeMismatch { path, expected, found } => {
+            assert!(path.ends_with("a2.svg"));
+            assert_eq!((expected, found), ((40, 40), (50, 40)));
+        }
+        e => panic!("{e}"),
+    }
+    let d = dir("broken");
+    std::fs::write(d.join("a1.svg"), "<svg xmlns='http://www.w3.org/2000/svg' width='4' height='4'><g>").unwrap();
+    let e = anim::load(&d, &LoadOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("a1.svg") && e.contains("line"), "{e}");
+    let d = dir("empty");
+    std::fs::write(d.join("a1.svg"), frame("<defs/>", 10, 10)).unwrap();
+    assert!(matches!(anim::load(&d, &LoadOptions::default()).unwrap_err(), Error::Empty { .. }));
+    let e = anim::load(&dir("nothing").join("*.svg"), &LoadOptions::default()).unwrap_err();
+    assert!(matches!(e, Error::Empty { .. }), "{e}");
+}
