@@ -25,6 +25,7 @@ pub mod guide;
 pub mod img;
 pub mod output;
 pub mod progress;
+pub mod render;
 pub mod seq;
 pub mod synth;
 

@@ -23,6 +23,9 @@ struct Cli {
 enum Command {
     /// Print an animation's size, frames and layers; optionally write mask and guide previews.
     Inspect(cli::inspect::Args),
+    /// Stylize an animation: every layer painted with an exemplar, recolored, composited,
+    /// written as PNG frames (and a GIF).
+    Render(Box<cli::render::Args>),
     /// Run the synthesis engine on a plain mask sequence (output in the exemplar's colors).
     Synth(cli::synth::Args),
     /// Measure a stylized sequence against its exemplar and target masks (coverage, texture,
@@ -38,6 +41,7 @@ fn main() -> ExitCode {
     let ctx = cli::Ctx { quiet: cli.quiet, verbose: cli.verbose };
     let result = match cli.command {
         Command::Inspect(args) => cli::inspect::run(args, &ctx),
+        Command::Render(args) => cli::render::run(*args, &ctx),
         Command::Synth(args) => cli::synth::run(args, &ctx),
         Command::Eval(args) => cli::eval::run(args, &ctx),
         Command::Exemplar(args) => cli::exemplar::run(args, &ctx),

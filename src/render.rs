@@ -165,14 +165,17 @@ fn fnv(s: &str) -> u64 {
 /// The region to synthesize for one frame: the fill, with the strokes merged under
 /// [`StrokeMode::Stylize`].
 fn target_fill(rf: &RegionFrame, strokes: StrokeMode) -> Plane<Rgba> {
-    if strokes == StrokeMode::Stylize { composite::merge_strokes(&rf.fill, rf.strokes.as_ref()) } else { rf.fill.clone() }
+    if strokes == StrokeMode::Stylize {
+        composite::merge_strokes(&rf.fill, rf.strokes.as_ref())
+    } else {
+        rf.fill.clone()
+    }
 }
 
 /// Resolves every region's style: explicit `styles` first, then the default.
 fn resolve_styles(anim: &Animation, opts: &RenderOptions) -> Result<Vec<Option<String>>> {
     let default = opts.default_style.clone().unwrap_or_else(|| exemplar::DEFAULT.to_string());
-    let mut out: Vec<Option<String>> =
-        vec![if default == NO_STYLE { None } else { Some(default) }; anim.regions.len()];
+    let mut out: Vec<Option<String>> = vec![if default == NO_STYLE { None } else { Some(default) }; anim.regions.len()];
     for (key, style) in &opts.styles {
         let i = anim.find_region(key)?;
         out[i] = if style == NO_STYLE { None } else { Some(style.clone()) };
@@ -187,7 +190,8 @@ fn style_params(base: &Params, ex: &Exemplar, scale: f32) -> Result<Params> {
     }
     let g = base.guide();
     let (ml, mu) = base.prev_bounds();
-    let mut b = base.to_builder()
+    let mut b = base
+        .to_builder()
         .src_scale(base.src_scale().unwrap_or(ex.meta.scale) * scale)
         .blur_sigma(g.blur_sigma * scale)
         .prev_bounds(ml * scale, mu * scale);
@@ -208,7 +212,11 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
     }
     let range = opts.frames.start.min(anim.frames)..opts.frames.end.min(anim.frames);
     if range.is_empty() {
-        return Err(Error::param("frames", format!("{:?}", opts.frames), format!("a range inside 1..={}", anim.frames)));
+        return Err(Error::param(
+            "frames",
+            format!("{:?}", opts.frames),
+            format!("a range inside 1..={}", anim.frames),
+        ));
     }
     let (w, h) = (anim.width as usize, anim.height as usize);
     let background = match &opts.background {
@@ -428,18 +436,26 @@ fn evaluate_layer(l: &Layer, style: &Style, w: usize, h: usize) -> Result<eval::
         .kept
         .iter()
         .map(|(rgba, _)| {
-            Plane::from_vec(w, h, rgba.chunks(4).map(|c| [unorm(c[0]), unorm(c[1]), unorm(c[2]), unorm(c[3])]).collect())
-                .unwrap_or_else(|| Plane::new(w, h))
+            Plane::from_vec(
+                w,
+                h,
+                rgba.chunks(4).map(|c| [unorm(c[0]), unorm(c[1]), unorm(c[2]), unorm(c[3])]).collect(),
+            )
+            .unwrap_or_else(|| Plane::new(w, h))
         })
         .collect();
     let masks: Vec<Plane<f32>> = l
         .kept
         .iter()
-        .map(|(_, cov)| Plane::from_vec(w, h, cov.iter().map(|&v| unorm(v)).collect()).unwrap_or_else(|| Plane::new(w, h)))
+        .map(|(_, cov)| {
+            Plane::from_vec(w, h, cov.iter().map(|&v| unorm(v)).collect()).unwrap_or_else(|| Plane::new(w, h))
+        })
         .collect();
-    let mut options = eval::EvalOptions::default();
-    options.src_scale = style.params.src_scale();
-    options.src_speed = style.params.src_speed();
+    let options = eval::EvalOptions {
+        exemplar_scale: style.params.src_scale(),
+        exemplar_step: style.params.src_speed(),
+        ..Default::default()
+    };
     eval::evaluate(&frames, &style.exemplar, &masks, &options)
 }
 
@@ -492,5 +508,3 @@ fn restore(dir: &Path, fingerprint: u64, layers: &mut [Layer], anim: &Animation)
     }
     Ok(done)
 }
-
-use std::io::Write as _;

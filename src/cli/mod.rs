@@ -5,6 +5,7 @@ pub mod exemplar;
 pub mod inspect;
 pub mod params;
 pub mod progress;
+pub mod render;
 pub mod synth;
 
 use std::io::Write;

@@ -71,6 +71,11 @@ impl Params {
         ParamsBuilder { p: Params::default() }
     }
 
+    /// A builder starting from these parameters.
+    pub fn to_builder(&self) -> ParamsBuilder {
+        ParamsBuilder { p: self.clone() }
+    }
+
     /// Border width b in pixels, when set explicitly (else the exemplar's recommendation).
     pub fn border_width(&self) -> Option<f32> {
         self.border_width
