@@ -22,13 +22,13 @@ pub struct SynthFlags {
     /// Weight of the border channel w_df (w^bound) [default: 5].
     #[arg(long, value_name = "W")]
     pub dist_weight: Option<f32>,
-    /// Weight of the motion-extent channels w_ext [default: 0.03].
+    /// Weight of the motion-extent channels w_ext [default: 0.015].
     #[arg(long, value_name = "W")]
     pub flow_weight: Option<f32>,
     /// Weight of the temporal guide w_prev (w^temp) [default: 4].
     #[arg(long, value_name = "W")]
     pub prev_weight: Option<f32>,
-    /// Uniformity weight λ [default: 2].
+    /// Uniformity weight λ [default: 4].
     #[arg(long, value_name = "L")]
     pub lambda: Option<f32>,
     /// Temporal radius r of the occurrence boxes, frames [default: 5].
@@ -61,7 +61,7 @@ pub struct SynthFlags {
     /// Temporal modulation bounds "m_u,m_l" in pixels, as in the thesis [default: 10,2].
     #[arg(long, value_name = "MU,ML")]
     pub prev_modulation_bounds: Option<String>,
-    /// σ of the center weighting in voting, pixels; 0 = uniform [default: 1].
+    /// σ of the center weighting in voting, pixels; 0 = uniform [default: 0.7].
     #[arg(long, value_name = "PX")]
     pub vote_sigma: Option<f32>,
     /// Also optimize the finest pyramid level (slower; the thesis only votes it).

@@ -265,10 +265,9 @@ impl Synthesizer {
 
         // SHIFTNNF of the previous frame's field, at full resolution.
         let active0: Vec<bool> = source::dilate(&g.mask, HALF).into_vec();
-        let shifted0 = self
-            .prev
-            .as_ref()
-            .map(|prev| shift::shift_nnf(&src.levels[0], &prev.nnf0, &prev.ext_pos, g.ext_pos.data(), &active0));
+        let shifted0 = self.prev.as_ref().map(|prev| {
+            shift::shift_nnf(&src.levels[0], &prev.nnf0, &prev.ext_pos, g.ext_pos.data(), &active0, p.time_shift)
+        });
         let has_prev = shifted0.as_ref().is_some_and(|n| n.data.iter().any(|m| m.ok));
 
         let mut level_times = Vec::with_capacity(levels);
@@ -307,15 +306,7 @@ impl Synthesizer {
                     let mut f = prev_down.clone().unwrap_or_else(|| Nnf::new(lw, lh));
                     let had_prev = prev_down.is_some();
                     sanitize(&mut f, sl, &tgt);
-                    let ctx = Ctx {
-                        src: sl,
-                        tgt: &tgt,
-                        omega: &no_omega,
-                        w_col: 1.0,
-                        alpha: p.alpha,
-                        direction_rule: p.direction_rule,
-                        keys: keys(u64::MAX),
-                    };
+                    let ctx = Ctx { src: sl, tgt: &tgt, omega: &no_omega, w_col: 1.0, params: p, keys: keys(u64::MAX) };
                     fill_holes(&ctx, &mut f);
                     if !had_prev {
                         // First frame: random field, then one guide-only PatchMatch pass (thesis §4.2).
@@ -329,15 +320,8 @@ impl Synthesizer {
                     let mut up = coarse.upscale(lw, lh);
                     sanitize(&mut up, sl, &tgt);
                     if !finest_vote_only {
-                        let ctx = Ctx {
-                            src: sl,
-                            tgt: &tgt,
-                            omega: &no_omega,
-                            w_col: 1.0,
-                            alpha: p.alpha,
-                            direction_rule: p.direction_rule,
-                            keys: keys(u64::MAX),
-                        };
+                        let ctx =
+                            Ctx { src: sl, tgt: &tgt, omega: &no_omega, w_col: 1.0, params: p, keys: keys(u64::MAX) };
                         fill_holes(&ctx, &mut up);
                     }
                     if let Some(mut pd) = prev_down.clone() {
@@ -353,15 +337,7 @@ impl Synthesizer {
                         } else {
                             occurrence::penalty(sl, &up, &tgt, p.occ_radius, p.lambda)
                         };
-                        let ctx = Ctx {
-                            src: sl,
-                            tgt: &tgt,
-                            omega: &omega,
-                            w_col: p.w_color,
-                            alpha: p.alpha,
-                            direction_rule: p.direction_rule,
-                            keys: keys(0),
-                        };
+                        let ctx = Ctx { src: sl, tgt: &tgt, omega: &omega, w_col: p.w_color, params: p, keys: keys(0) };
                         merge(&ctx, &mut up, &pd);
                         evaluations += 2 * tgt.active.len() as u64;
                     }
@@ -379,8 +355,7 @@ impl Synthesizer {
                             tgt: &tgt,
                             omega: &omega,
                             w_col: p.w_color,
-                            alpha: p.alpha,
-                            direction_rule: p.direction_rule,
+                            params: p,
                             keys: keys(opt as u64),
                         };
                         patchmatch::refresh_errors(&ctx, &mut field);
@@ -401,7 +376,8 @@ impl Synthesizer {
                 }));
             }
             if l == 0 {
-                final_rgb = vote::vote(sl, &field, paper, p.vote_sigma);
+                // The output: bicubic sampling keeps rotated patches sharper than bilinear.
+                final_rgb = vote::vote_with(sl, &field, paper, p.vote_sigma, true);
             }
             nnf = Some(field);
             level_times.push(t0.elapsed());
@@ -448,7 +424,8 @@ fn write_lanes(tgt: &mut TargetLevel, rgb: &[Rgb], cur: bool) {
 
 /// Makes every match usable by the kernel: drops matches of inactive pixels, clamps frame
 /// indices and centers into the valid margin (centers may have drifted out through
-/// up-scaling or the time shift).
+/// up-scaling or the time shift). θ is kept, as the paper keeps it through UPSCALENNF and
+/// SHIFTNNF.
 fn sanitize(nnf: &mut Nnf, src: &SourceLevel, tgt: &TargetLevel) {
     let (xmax, ymax) = ((src.w - 1 - MARGIN) as f32, (src.h - 1 - MARGIN) as f32);
     let last = (src.frames - 1) as u16;

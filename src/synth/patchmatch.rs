@@ -9,12 +9,37 @@
 //! result does not depend on the thread count.
 
 use super::nnf::{Match, Nnf, aligning_rotation};
+use super::params::Params;
 use super::patch::{OmegaMap, Query, patch_error};
 use super::rng::Rng;
 use super::source::{INTERIOR, SourceLevel, VALID};
 use super::target::TargetLevel;
 use glam::Vec2;
 use rayon::prelude::*;
+
+/// The rotations to try for a target pixel with flow direction `t_dir` and a source pixel with
+/// `s_dir` (paper §4, thesis §4.3): M aligning the flows (θ_T − θ_S) and its +π alternative,
+/// which compares ext± swapped. Where either flow is too small to have a direction, only θ = 0.
+/// Returns the options and how many are valid.
+#[inline]
+pub(crate) fn rotations(params: &Params, t_dir: Vec2, s_dir: Vec2) -> ([(f32, f32, bool); 2], usize) {
+    if t_dir == Vec2::ZERO || s_dir == Vec2::ZERO {
+        return ([(1.0, 0.0, false); 2], 1);
+    }
+    if !params.direction_rule {
+        // Ablation: θ = 0; the ext swap still follows the flows' relative direction.
+        return ([(1.0, 0.0, t_dir.dot(s_dir) < 0.0); 2], 1);
+    }
+    let (c, s) = aligning_rotation(t_dir, s_dir);
+    ([(c, s, false), (-c, -s, true)], 2)
+}
+
+/// The option of [`rotations`] of the same kind (aligned or flipped) as `flip`.
+#[inline]
+pub(crate) fn rotation_like(params: &Params, t_dir: Vec2, s_dir: Vec2, flip: bool) -> (f32, f32, bool) {
+    let (opts, n) = rotations(params, t_dir, s_dir);
+    if n == 2 && flip { opts[1] } else { opts[0] }
+}
 
 /// Rows per parallel band.
 pub(crate) const TILE_ROWS: usize = 16;
@@ -26,10 +51,8 @@ pub(crate) struct Ctx<'a> {
     pub omega: &'a OmegaMap,
     /// Color weight (0 for the guide-only initialization pass).
     pub w_col: f32,
-    /// Random-search shrink factor α.
-    pub alpha: f32,
-    /// Use the flow-alignment rule for θ (else θ = 0).
-    pub direction_rule: bool,
+    /// The parameters (α, the θ rule, the segment restriction).
+    pub params: &'a Params,
     /// Keys of the random streams (seed, frame, level, EM iteration).
     pub keys: [u64; 4],
 }
@@ -53,32 +76,20 @@ impl Ctx<'_> {
     #[inline]
     pub fn wanted_segment(&self, q: usize) -> Option<usize> {
         let seg = self.tgt.segment(q);
-        if self.src.valid[seg].is_empty() { None } else { Some(seg) }
+        if !self.params.segments || self.src.valid[seg].is_empty() { None } else { Some(seg) }
     }
 
     /// The rotations to try for target pixel q and a source pixel with flow direction `s_dir`
-    /// (paper §4, thesis §4.3): M aligning the flows (θ_T − θ_S) and its +π alternative, which
-    /// compares ext± swapped. Where either flow is too small to have a direction, only θ = 0.
-    /// Returns the options and how many are valid.
+    /// ([`rotations`]).
     #[inline]
     pub fn rotations(&self, q: usize, s_dir: Vec2) -> ([(f32, f32, bool); 2], usize) {
-        let t_dir = self.tgt.info[q].dir;
-        if t_dir == Vec2::ZERO || s_dir == Vec2::ZERO {
-            return ([(1.0, 0.0, false); 2], 1);
-        }
-        if !self.direction_rule {
-            // Ablation: θ = 0; the ext swap still follows the flows' relative direction.
-            return ([(1.0, 0.0, t_dir.dot(s_dir) < 0.0); 2], 1);
-        }
-        let (c, s) = aligning_rotation(t_dir, s_dir);
-        ([(c, s, false), (-c, -s, true)], 2)
+        rotations(self.params, self.tgt.info[q].dir, s_dir)
     }
 
     /// The rotation option of the same kind (aligned or flipped) as `flip`.
     #[inline]
     pub fn rotation_like(&self, q: usize, s_dir: Vec2, flip: bool) -> (f32, f32, bool) {
-        let (opts, n) = self.rotations(q, s_dir);
-        if n == 2 && flip { opts[1] } else { opts[0] }
+        rotation_like(self.params, self.tgt.info[q].dir, s_dir, flip)
     }
 
     /// Validates a candidate center: the nearest pixel is a valid center of the right segment.
@@ -129,8 +140,9 @@ impl Ctx<'_> {
         Match { x: x as f32, y: y as f32, c, s, err: f32::INFINITY, i: i as u16, flip, ok: true }
     }
 
-    /// Tries candidate center (i, x, y) against `best`: with the θ option like `like` when
-    /// given (propagation), else with both options (random search).
+    /// Tries candidate center (i, x, y) against `best` with θ set by the flow-alignment rule
+    /// (paper §4): for propagation only the option of the neighbour's kind (aligned or flipped,
+    /// `like`), for random search both.
     #[inline]
     #[allow(clippy::too_many_arguments)]
     fn try_candidate(
@@ -191,9 +203,9 @@ impl Ctx<'_> {
             let y = (best.y + rng.range_f32(-ry, ry)).round();
             let i = (best.i as f32 + rng.range_f32(-ri, ri)).round().clamp(0.0, last);
             self.try_candidate(q, query, &mut best, i as usize, x, y, None, stats);
-            rx *= self.alpha;
-            ry *= self.alpha;
-            ri *= self.alpha;
+            rx *= self.params.alpha;
+            ry *= self.params.alpha;
+            ri *= self.params.alpha;
         }
         best
     }

@@ -15,11 +15,22 @@ use rayon::prelude::*;
 /// `|ΔT − (S^ext+(i+Δi, x, y) − S^ext+(i, x, y))|` with `ΔT = T^ext+(j) − T^ext+(j−1)`;
 /// with opposite flows ([`Match::flip`]), Δi ≤ 0 minimizes the same with `S^ext−`.
 /// Δi stays inside the exemplar (when it runs out the paint lags; m(q) handles that).
-pub(crate) fn shift_nnf(src: &SourceLevel, prev: &Nnf, ext_prev: &[f32], ext_cur: &[f32], active: &[bool]) -> Nnf {
+pub(crate) fn shift_nnf(
+    src: &SourceLevel,
+    prev: &Nnf,
+    ext_prev: &[f32],
+    ext_cur: &[f32],
+    active: &[bool],
+    enabled: bool,
+) -> Nnf {
     let mut out = Nnf::new(prev.w, prev.h);
     out.data.par_iter_mut().enumerate().for_each(|(q, o)| {
         let m = &prev.data[q];
         if !m.ok || !active[q] {
+            return;
+        }
+        if !enabled {
+            *o = Match { err: f32::INFINITY, ..*m };
             return;
         }
         let dt = ext_cur[q] - ext_prev[q];

@@ -212,6 +212,47 @@ impl SourceLevel {
     }
 }
 
+impl SourceLevel {
+    /// Catmull–Rom (bicubic) sample of the rgb lanes at (x, y) of frame i, clamped to 0..=1:
+    /// sharper than [`SourceLevel::sample_rgb`] where rotated patches land between pixels.
+    #[inline]
+    pub fn sample_rgb_cubic(&self, i: usize, x: f32, y: f32) -> Rgb {
+        let rows = self.frame_len / self.stride;
+        let px = (x + PAD as f32).clamp(1.0, (self.stride - 3) as f32);
+        let py = (y + PAD as f32).clamp(1.0, (rows - 3) as f32);
+        let x0 = px as usize;
+        let y0 = py as usize;
+        let (tx, ty) = (px - x0 as f32, py - y0 as f32);
+        let wts = |t: f32| {
+            let t2 = t * t;
+            let t3 = t2 * t;
+            [
+                0.5 * (-t3 + 2.0 * t2 - t),
+                0.5 * (3.0 * t3 - 5.0 * t2 + 2.0),
+                0.5 * (-3.0 * t3 + 4.0 * t2 + t),
+                0.5 * (t3 - t2),
+            ]
+        };
+        let (wx, wy) = (wts(tx), wts(ty));
+        let base = i * self.frame_len + (y0 - 1) * self.stride + x0 - 1;
+        let mut out = [0.0f32; 3];
+        for (j, &wyj) in wy.iter().enumerate() {
+            let row = base + j * self.stride;
+            let mut r = [0.0f32; 3];
+            for (k, &wxk) in wx.iter().enumerate() {
+                let p = &self.feat[row + k];
+                for c in 0..3 {
+                    r[c] += wxk * p[c] as f32;
+                }
+            }
+            for c in 0..3 {
+                out[c] += wyj * r[c];
+            }
+        }
+        out.map(|v| (v * (1.0 / 255.0)).clamp(0.0, 1.0))
+    }
+}
+
 /// The exemplar's pyramid, shared by every layer synthesized with the same exemplar and
 /// parameters.
 pub struct SourcePyramid {

@@ -124,3 +124,56 @@ fn output_does_not_depend_on_the_thread_count() {
     assert_eq!(one, run(2));
     assert_eq!(one, run(3));
 }
+
+/// The θ rule: every match's rotation M maps the target flow direction onto the source flow
+/// direction (or its opposite, with ext± swapped), wherever both have a direction.
+#[test]
+fn rotations_align_source_and_target_flows() {
+    let (rgb, g) = disc_exemplar(64, 64, 6, 7);
+    // A target translating to the right: flows point +x, source flows point radially.
+    let target: Vec<FrameGuides> = (0..3)
+        .map(|k| {
+            let mut t = disc_guides(90, 60, Vec2::new(40.0 + 2.0 * k as f32, 30.0), 20.0, 2.0, k, 3);
+            t.flow = t.mask.map(|m| if m { Vec2::new(2.0, 0.0) } else { Vec2::ZERO });
+            t
+        })
+        .collect();
+    let alignment = |rule: bool| {
+        let params = Params::builder().seed(1).direction_rule(rule).build().unwrap();
+        let source = Source::from_parts(&rgb, &g, &params, 5.0).unwrap();
+        let mut s = Synthesizer::new(source.clone(), params).unwrap();
+        for t in &target {
+            s.step(t).unwrap();
+        }
+        let prev = s.prev.as_ref().unwrap();
+        let src = &source.pyramid.levels[0];
+        let (mut sum, mut n, mut flips, mut consistent) = (0.0f32, 0usize, 0usize, 0usize);
+        for (q, m) in prev.nnf0.data.iter().enumerate() {
+            let Some((_, inf)) = src.info_at(m.i as usize, m.x, m.y) else { continue };
+            if !m.ok || inf.dir == Vec2::ZERO || !target[2].mask.data()[q] {
+                continue;
+            }
+            // M·t̂ should be ±ŝ.
+            let (mx, my) = m.rotate(1.0, 0.0);
+            let d = Vec2::new(mx, my).dot(inf.dir);
+            sum += d.abs();
+            n += 1;
+            flips += (d < 0.0) as usize;
+            consistent += (m.flip == (d < 0.0)) as usize;
+        }
+        (sum / n as f32, flips as f32 / n as f32, consistent as f32 / n as f32)
+    };
+    // The final field is the up-scaled one of the level above, so the source direction at the
+    // full-resolution position can differ slightly from the one the rotation was chosen for.
+    let (with, flipped, consistent) = alignment(true);
+    let (without, _, _) = alignment(false);
+    eprintln!("alignment with the rule {with} (flipped {flipped}, consistent {consistent}), without {without}");
+    // The final field is the up-scaled one of the level above: its rotations were chosen for
+    // the coarser source pixels, whose flow directions differ a little from the full-resolution
+    // ones (most near the exemplar's flow center).
+    assert!(with > 0.8, "mean |cos| with the rule: {with}");
+    assert!(consistent > 0.9, "the +π option must be the flipped one: {consistent}");
+    assert!(without < with - 0.15, "mean |cos| without the rule: {without}");
+    // Both options are used (material moving with and against the exemplar's flow).
+    assert!(flipped > 0.05 && flipped < 0.95, "share of flipped matches {flipped}");
+}

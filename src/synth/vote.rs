@@ -14,6 +14,11 @@ use rayon::prelude::*;
 /// stochastic texture: uniform averaging of 25 slightly misaligned patches washes its grain out,
 /// center weighting keeps it (measured in the engine's notes).
 pub(crate) fn vote(src: &SourceLevel, nnf: &Nnf, fill: Rgb, sigma: f32) -> Vec<Rgb> {
+    vote_with(src, nnf, fill, sigma, false)
+}
+
+/// [`vote`] with bicubic sampling when `cubic` (for the final output).
+pub(crate) fn vote_with(src: &SourceLevel, nnf: &Nnf, fill: Rgb, sigma: f32, cubic: bool) -> Vec<Rgb> {
     let (w, h) = (nnf.w, nnf.h);
     let weights: Vec<f32> = offsets()
         .map(|(a, b)| if sigma > 0.0 { (-((a * a + b * b) as f32) / (2.0 * sigma * sigma)).exp() } else { 1.0 })
@@ -37,7 +42,11 @@ pub(crate) fn vote(src: &SourceLevel, nnf: &Nnf, fill: Rgb, sigma: f32) -> Vec<R
                     continue;
                 }
                 let (dx, dy) = m.rotate(a as f32, b as f32);
-                let c = src.sample_rgb(m.i as usize, m.x + dx, m.y + dy);
+                let c = if cubic {
+                    src.sample_rgb_cubic(m.i as usize, m.x + dx, m.y + dy)
+                } else {
+                    src.sample_rgb(m.i as usize, m.x + dx, m.y + dy)
+                };
                 acc[0] += wt * c[0];
                 acc[1] += wt * c[1];
                 acc[2] += wt * c[2];
