@@ -28,6 +28,7 @@ pub mod progress;
 pub mod render;
 pub mod seq;
 pub mod synth;
+pub mod workload;
 
 pub use error::{Error, Result};
 pub use progress::{NoProgress, Progress};

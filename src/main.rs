@@ -26,6 +26,8 @@ enum Command {
     /// Stylize an animation: every layer painted with an exemplar, recolored, composited,
     /// written as PNG frames (and a GIF).
     Render(Box<cli::render::Args>),
+    /// Measure the engine's speed on a paper-like workload (the `horse` of Table 2).
+    Bench(cli::bench::Args),
     /// Run the synthesis engine on a plain mask sequence (output in the exemplar's colors).
     Synth(cli::synth::Args),
     /// Measure a stylized sequence against its exemplar and target masks (coverage, texture,
@@ -42,6 +44,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Inspect(args) => cli::inspect::run(args, &ctx),
         Command::Render(args) => cli::render::run(*args, &ctx),
+        Command::Bench(args) => cli::bench::run(args, &ctx),
         Command::Synth(args) => cli::synth::run(args, &ctx),
         Command::Eval(args) => cli::eval::run(args, &ctx),
         Command::Exemplar(args) => cli::exemplar::run(args, &ctx),

@@ -1,5 +1,6 @@
 //! Command implementations; each subcommand has its own file with its `Args` and `run`.
 
+pub mod bench;
 pub mod eval;
 pub mod exemplar;
 pub mod inspect;

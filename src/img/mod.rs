@@ -150,6 +150,15 @@ impl<T: Copy> Plane<T> {
         Plane { width: self.width, height: self.height, data: self.data.iter().copied().map(f).collect() }
     }
 
+    /// The `w × h` window whose top-left pixel is `(x0, y0)`; parts outside the plane are
+    /// `fill`.
+    pub fn crop(&self, x0: usize, y0: usize, w: usize, h: usize, fill: T) -> Plane<T> {
+        Plane::from_fn(w, h, |x, y| {
+            let (sx, sy) = (x0 + x, y0 + y);
+            if sx < self.width && sy < self.height { self.data[sy * self.width + sx] } else { fill }
+        })
+    }
+
     /// True when `(x, y)` (signed) lies inside the plane.
     #[inline]
     pub fn contains(&self, x: isize, y: isize) -> bool {

@@ -7,7 +7,7 @@ use super::{PrevState, Synthesizer};
 use crate::error::{Error, Result};
 use std::path::Path;
 
-const MAGIC: &[u8; 8] = b"FMSYNTH2";
+const MAGIC: &[u8; 8] = b"FMSYNTH3";
 
 struct Writer(Vec<u8>);
 
@@ -72,6 +72,8 @@ impl Synthesizer {
             None => w.u64(0),
             Some(p) => {
                 w.u64(1);
+                w.u64(p.origin.0 as u64);
+                w.u64(p.origin.1 as u64);
                 w.u64(p.nnf0.w as u64);
                 w.u64(p.nnf0.h as u64);
                 // Sparse: a bit per pixel, then the matches (and T^ext+) of the set bits only.
@@ -121,6 +123,8 @@ impl Synthesizer {
         let prev = match r.u64().ok_or_else(trunc)? {
             0 => None,
             _ => {
+                let ox = r.len(1 << 16).ok_or_else(trunc)?;
+                let oy = r.len(1 << 16).ok_or_else(trunc)?;
                 let w = r.len(1 << 16).ok_or_else(trunc)?;
                 let h = r.len(1 << 16).ok_or_else(trunc)?;
                 let n = r.len(limit).ok_or_else(trunc)?;
@@ -159,7 +163,7 @@ impl Synthesizer {
                     masks
                         .push(unpack_bits(r.take(n).ok_or_else(trunc)?, len).ok_or_else(|| bad("inconsistent sizes"))?);
                 }
-                Some(PrevState { nnf0: nnf, ext_pos, masks })
+                Some(PrevState { origin: (ox, oy), nnf0: nnf, ext_pos, masks })
             }
         };
         if r.pos != data.len() {

@@ -163,6 +163,8 @@ pub struct SynthFrame {
     pub mask: Mask,
     /// Time spent per pyramid level, coarsest first.
     pub level_times: Vec<Duration>,
+    /// Time spent per stage.
+    pub stages: StageTimes,
     /// Patch-error evaluations in this frame.
     pub evaluations: u64,
     /// The energy E = Σ_q D(NNF(q), q) (mean per active pixel) at the start of every
@@ -170,6 +172,33 @@ pub struct SynthFrame {
     pub energy: Vec<(usize, f64)>,
     /// Debug views, when enabled with [`Synthesizer::set_debug`].
     pub debug: Option<DebugViews>,
+}
+
+/// Where the time of one frame went, per stage (summed over levels).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct StageTimes {
+    /// Building the target pyramid and per-level layouts.
+    pub target: Duration,
+    /// SHIFTNNF, DOWNSCALENNF and m(q).
+    pub shift: Duration,
+    /// Voting (T^rgb, T^prev and the output).
+    pub vote: Duration,
+    /// The occurrence map Ω.
+    pub occurrence: Duration,
+    /// Recomputing the errors of the current field.
+    pub refresh: Duration,
+    /// PatchMatch sweeps (propagation and random search).
+    pub patchmatch: Duration,
+    /// UPSCALENNF, MERGENNF and initialization.
+    pub init: Duration,
+}
+
+#[inline]
+fn timed<T>(acc: &mut Duration, f: impl FnOnce() -> T) -> T {
+    let t = Instant::now();
+    let r = f();
+    *acc += t.elapsed();
+    r
 }
 
 /// What a user can look at to see what the engine did in one frame.
@@ -196,7 +225,9 @@ fn mean_err(nnf: &Nnf) -> f64 {
 
 /// What is carried from one frame to the next.
 struct PrevState {
-    /// Final full-resolution field of the previous frame.
+    /// Top-left corner of the previous frame's working window (full resolution).
+    origin: (usize, usize),
+    /// Final full-resolution field of the previous frame, over its window.
     nnf0: Nnf,
     /// `T^ext+` of the previous frame.
     ext_pos: Vec<f32>,
@@ -251,12 +282,34 @@ impl Synthesizer {
         }
         self.size = Some((w, h));
         let levels = self.level_count(w, h);
+        let mut st = StageTimes::default();
+        let t_pyr = Instant::now();
+        // Work only in the mask's bounding box (grown by the patch radius and a margin),
+        // aligned so that every pyramid level keeps whole pixels.
+        let Some(win) = window(&g.mask, 1 << (levels - 1)) else {
+            self.prev = None;
+            self.frame += 1;
+            return Ok(SynthFrame {
+                rgb: Plane::filled(w, h, self.source.pyramid.paper),
+                mask: g.mask.clone(),
+                level_times: Vec::new(),
+                stages: st,
+                evaluations: 0,
+                energy: Vec::new(),
+                debug: None,
+            });
+        };
+        let full = g;
+        let cropped = crop_guides(g, win);
+        let g = &cropped;
+        let (w, h) = g.mask.size();
         let mut pyr: Vec<FrameGuides> = Vec::with_capacity(levels);
         pyr.push(g.clone());
         for l in 1..levels {
             let next = pyr[l - 1].downsample2();
             pyr.push(next);
         }
+        st.target += t_pyr.elapsed();
         let src = self.source.pyramid.clone();
         let p = &self.params;
         let b = src.border_width;
@@ -264,11 +317,15 @@ impl Synthesizer {
         let paper = src.paper;
 
         // SHIFTNNF of the previous frame's field, at full resolution.
+        let t_shift = Instant::now();
         let active0: Vec<bool> = source::dilate(&g.mask, HALF).into_vec();
-        let shifted0 = self.prev.as_ref().map(|prev| {
+        // The previous frame's state, moved into this frame's window.
+        let prev_here: Option<PrevState> = self.prev.as_ref().map(|prev| rewindow(prev, (win.0, win.1), &pyr));
+        let shifted0 = prev_here.as_ref().map(|prev| {
             shift::shift_nnf(&src.levels[0], &prev.nnf0, &prev.ext_pos, g.ext_pos.data(), &active0, p.time_shift)
         });
         let has_prev = shifted0.as_ref().is_some_and(|n| n.data.iter().any(|m| m.ok));
+        st.shift += t_shift.elapsed();
 
         let mut level_times = Vec::with_capacity(levels);
         let mut evaluations = 0u64;
@@ -283,16 +340,18 @@ impl Synthesizer {
             let sl = &src.levels[l];
             let gl = &pyr[l];
             let (lw, lh) = gl.mask.size();
-            let mut tgt = TargetLevel::new(gl, &src.quant, b, ext_cap, paper);
+            let mut tgt = timed(&mut st.target, || TargetLevel::new(gl, &src.quant, b, ext_cap, paper));
             masks[l] = shift::mask_flags(&tgt);
             let keys = |it: u64| [p.seed, self.frame as u64, l as u64, it];
             // Temporal guide T^prev and m(q) from the down-scaled shifted field.
             let prev_down = if has_prev {
-                let shifted = shifted0.as_ref().map(|s| s.downscale(l, lw, lh));
-                if let (Some(sd), Some(prev)) = (&shifted, &self.prev) {
-                    let voted = vote::vote(sl, sd, paper, p.vote_sigma);
+                let shifted = timed(&mut st.shift, || shifted0.as_ref().map(|s| s.downscale(l, lw, lh)));
+                if let (Some(sd), Some(prev)) = (&shifted, &prev_here) {
+                    let voted = timed(&mut st.vote, || vote::vote(sl, sd, paper, p.vote_sigma));
                     write_lanes(&mut tgt, &voted, false);
-                    shift::fill_modulation(&mut tgt, sl, sd, &prev.masks[l], b, p.prev_bounds, p.w_prev);
+                    timed(&mut st.shift, || {
+                        shift::fill_modulation(&mut tgt, sl, sd, &prev.masks[l], b, p.prev_bounds, p.w_prev)
+                    });
                 }
                 shifted
             } else {
@@ -311,8 +370,8 @@ impl Synthesizer {
                     if !had_prev {
                         // First frame: random field, then one guide-only PatchMatch pass (thesis §4.2).
                         let ctx = Ctx { w_col: 0.0, ..ctx };
-                        patchmatch::refresh_errors(&ctx, &mut f);
-                        evaluations += patchmatch::sweep(&ctx, &mut f, 0).evaluations;
+                        timed(&mut st.refresh, || patchmatch::refresh_errors(&ctx, &mut f));
+                        evaluations += timed(&mut st.patchmatch, || patchmatch::sweep(&ctx, &mut f, 0)).evaluations;
                     }
                     f
                 }
@@ -330,26 +389,27 @@ impl Synthesizer {
                         }
                         // MERGENNF: per pixel, the field with the smaller error (against the
                         // estimate voted from the up-scaled field).
-                        let voted = vote::vote(sl, &up, paper, p.vote_sigma);
+                        let voted = timed(&mut st.vote, || vote::vote(sl, &up, paper, p.vote_sigma));
                         write_lanes(&mut tgt, &voted, true);
                         let omega = if finest_vote_only {
                             no_omega.clone()
                         } else {
-                            occurrence::penalty(sl, &up, &tgt, p.occ_radius, p.lambda)
+                            timed(&mut st.occurrence, || occurrence::penalty(sl, &up, &tgt, p.occ_radius, p.lambda))
                         };
                         let ctx = Ctx { src: sl, tgt: &tgt, omega: &omega, w_col: p.w_color, params: p, keys: keys(0) };
-                        merge(&ctx, &mut up, &pd);
+                        timed(&mut st.init, || merge(&ctx, &mut up, &pd));
                         evaluations += 2 * tgt.active.len() as u64;
                     }
                     up
                 }
             };
             if !finest_vote_only {
-                let voted = vote::vote(sl, &field, paper, p.vote_sigma);
+                let voted = timed(&mut st.vote, || vote::vote(sl, &field, paper, p.vote_sigma));
                 write_lanes(&mut tgt, &voted, true);
                 for opt in 0..p.opt_iters_at(from_coarsest) {
                     for it in 0..p.pm_iters_at(from_coarsest) {
-                        let omega = occurrence::penalty(sl, &field, &tgt, p.occ_radius, p.lambda);
+                        let omega =
+                            timed(&mut st.occurrence, || occurrence::penalty(sl, &field, &tgt, p.occ_radius, p.lambda));
                         let ctx = Ctx {
                             src: sl,
                             tgt: &tgt,
@@ -358,13 +418,13 @@ impl Synthesizer {
                             params: p,
                             keys: keys(opt as u64),
                         };
-                        patchmatch::refresh_errors(&ctx, &mut field);
+                        timed(&mut st.refresh, || patchmatch::refresh_errors(&ctx, &mut field));
                         energy.push((l, mean_err(&field)));
                         evaluations += tgt.active.len() as u64;
-                        evaluations += patchmatch::sweep(&ctx, &mut field, it).evaluations;
+                        evaluations += timed(&mut st.patchmatch, || patchmatch::sweep(&ctx, &mut field, it)).evaluations;
                     }
                     energy.push((l, mean_err(&field)));
-                    let voted = vote::vote(sl, &field, paper, p.vote_sigma);
+                    let voted = timed(&mut st.vote, || vote::vote(sl, &field, paper, p.vote_sigma));
                     write_lanes(&mut tgt, &voted, true);
                 }
             }
@@ -377,16 +437,24 @@ impl Synthesizer {
             }
             if l == 0 {
                 // The output: bicubic sampling keeps rotated patches sharper than bilinear.
-                final_rgb = vote::vote_with(sl, &field, paper, p.vote_sigma, true);
+                final_rgb = timed(&mut st.vote, || vote::vote_with(sl, &field, paper, p.vote_sigma, true));
             }
             nnf = Some(field);
             level_times.push(t0.elapsed());
         }
         let field = nnf.unwrap_or_else(|| Nnf::new(w, h));
-        let rgb = Plane::from_vec(w, h, final_rgb).unwrap_or_else(|| Plane::filled(w, h, paper));
+        let (fw, fh) = full.mask.size();
+        let inside = |x: usize, y: usize| {
+            (x >= win.0 && y >= win.1 && x < win.0 + w && y < win.1 + h).then(|| (x - win.0, y - win.1))
+        };
+        let rgb = Plane::from_fn(fw, fh, |x, y| match inside(x, y) {
+            Some((cx, cy)) => final_rgb.get(cy * w + cx).copied().unwrap_or(paper),
+            None => paper,
+        });
         let debug = self.debug.then(|| {
             let s0 = &src.levels[0];
-            let nnf = Plane::from_fn(w, h, |x, y| {
+            let nnf = Plane::from_fn(fw, fh, |x, y| {
+                let Some((x, y)) = inside(x, y) else { return [0.0; 3] };
                 let m = field.get(x, y);
                 if !m.ok {
                     return [0.0; 3];
@@ -395,10 +463,87 @@ impl Synthesizer {
             });
             DebugViews { nnf, omega: omega_view.unwrap_or_else(|| Plane::new(1, 1)) }
         });
-        self.prev = Some(PrevState { nnf0: field, ext_pos: g.ext_pos.data().to_vec(), masks });
+        self.prev = Some(PrevState { origin: (win.0, win.1), nnf0: field, ext_pos: g.ext_pos.data().to_vec(), masks });
         self.frame += 1;
-        Ok(SynthFrame { rgb, mask: g.mask.clone(), level_times, evaluations, energy, debug })
+        Ok(SynthFrame { rgb, mask: full.mask.clone(), level_times, stages: st, evaluations, energy, debug })
     }
+}
+
+/// The working window `(x0, y0, w, h)` of a frame: the mask's bounding box grown by the patch
+/// radius and a margin, its corner aligned to multiples of `align` (2^(levels−1), so every
+/// pyramid level of the window starts on a whole pixel). `None` for an empty mask.
+fn window(mask: &Mask, align: usize) -> Option<(usize, usize, usize, usize)> {
+    let (w, h) = mask.size();
+    let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0usize, 0usize);
+    for y in 0..h {
+        let row = mask.row(y);
+        if let Some(first) = row.iter().position(|&b| b) {
+            let last = row.iter().rposition(|&b| b).unwrap_or(first);
+            x0 = x0.min(first);
+            x1 = x1.max(last + 1);
+            y0 = y0.min(y);
+            y1 = y1.max(y + 1);
+        }
+    }
+    if x0 == usize::MAX {
+        return None;
+    }
+    let m = HALF + 4;
+    let (x0, y0) = (x0.saturating_sub(m) / align * align, y0.saturating_sub(m) / align * align);
+    let (x1, y1) = ((x1 + m).min(w), (y1 + m).min(h));
+    Some((x0, y0, x1 - x0, y1 - y0))
+}
+
+/// The guides inside a window.
+fn crop_guides(g: &FrameGuides, (x0, y0, w, h): (usize, usize, usize, usize)) -> FrameGuides {
+    FrameGuides {
+        mask: g.mask.crop(x0, y0, w, h, false),
+        dist: g.dist.crop(x0, y0, w, h, -1.0),
+        flow: g.flow.crop(x0, y0, w, h, glam::Vec2::ZERO),
+        ext_pos: g.ext_pos.crop(x0, y0, w, h, 0.0),
+        ext_neg: g.ext_neg.crop(x0, y0, w, h, 0.0),
+    }
+}
+
+/// The previous frame's state re-indexed into the current window (origin `to`, full
+/// resolution) whose pyramid is `pyr`; what lies outside the previous window is empty.
+fn rewindow(prev: &PrevState, to: (usize, usize), pyr: &[FrameGuides]) -> PrevState {
+    let (fx, fy) = prev.origin;
+    let (w, h) = pyr[0].mask.size();
+    let map = |x: usize, y: usize, scale: usize, pw: usize, ph: usize| -> Option<usize> {
+        let (gx, gy) = (to.0 / scale + x, to.1 / scale + y);
+        let (px, py) = (gx.checked_sub(fx / scale)?, gy.checked_sub(fy / scale)?);
+        (px < pw && py < ph).then_some(py * pw + px)
+    };
+    let mut nnf0 = Nnf::new(w, h);
+    let mut ext_pos = vec![0.0; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            if let Some(k) = map(x, y, 1, prev.nnf0.w, prev.nnf0.h) {
+                nnf0.data[y * w + x] = prev.nnf0.data[k];
+                ext_pos[y * w + x] = prev.ext_pos[k];
+            }
+        }
+    }
+    let (pw0, ph0) = (prev.nnf0.w, prev.nnf0.h);
+    let masks = pyr
+        .iter()
+        .enumerate()
+        .map(|(l, g)| {
+            let (lw, lh) = g.mask.size();
+            let scale = 1 << l;
+            let (pw, ph) = (pw0.div_ceil(scale), ph0.div_ceil(scale));
+            let old = prev.masks.get(l);
+            (0..lh)
+                .flat_map(|y| (0..lw).map(move |x| (x, y)))
+                .map(|(x, y)| match (old, map(x, y, scale, pw, ph)) {
+                    (Some(m), Some(k)) => m.get(k).copied().unwrap_or(false),
+                    _ => false,
+                })
+                .collect()
+        })
+        .collect();
+    PrevState { origin: to, nnf0, ext_pos, masks }
 }
 
 /// Writes voted colors into the rgb lanes of `T^rgb` (`cur`) or `T^prev` (`!cur`).

@@ -99,7 +99,64 @@ unsafe fn patch_error_avx2(
     flip: bool,
     best: f32,
 ) -> f32 {
-    kernel(src, omega, tgt, q, i, cx, cy, c, s, flip, best)
+    use std::arch::x86_64::*;
+    let feat = src.feat.as_ptr();
+    let stride = src.stride;
+    let fbase = i * src.frame_len;
+    let lw = &src.lane_w;
+    let wc = _mm256_setr_ps(q.w_col * lw[0], q.w_col * lw[1], q.w_col * lw[2], lw[3], lw[4], lw[5], 0.0, 0.0);
+    let wp = _mm256_setr_ps(q.mw * lw[0], q.mw * lw[1], q.mw * lw[2], 0.0, 0.0, 0.0, 0.0, 0.0);
+    let swap = _mm256_setr_epi32(0, 1, 2, 3, 5, 4, 6, 7);
+    let use_prev = q.mw > 0.0;
+    let r = HALF as f32;
+    let pad = PAD as f32;
+    let mut acc = _mm256_setzero_ps();
+    let mut om = 0.0f32;
+    let tstride = tgt.stride;
+    let cur = tgt.cur.as_ptr() as *const f32;
+    let prev = tgt.prev.as_ptr() as *const f32;
+    let hsum = |acc: __m256| {
+        let mut l = [0.0f32; LANES];
+        // SAFETY: `l` holds 8 floats.
+        unsafe { _mm256_storeu_ps(l.as_mut_ptr(), acc) };
+        l.iter().sum::<f32>()
+    };
+    for b in 0..(2 * HALF + 1) {
+        let bf = b as f32 - r;
+        let trow = q.tq + b * tstride - HALF - HALF * tstride;
+        for a in 0..(2 * HALF + 1) {
+            let af = a as f32 - r;
+            let sx = cx + pad + (c * af - s * bf);
+            let sy = cy + pad + (s * af + c * bf);
+            // SAFETY (all unchecked accesses below): the padded coordinates are positive and
+            // inside frame i's padded block by the validity rule; target arrays are padded by
+            // ⌊n/2⌋ around every pixel; the CPU has AVX2 (checked by the caller).
+            let (x0, y0) = unsafe { ((sx + 0.5).to_int_unchecked::<i32>() as usize, (sy + 0.5).to_int_unchecked::<i32>() as usize) };
+            let idx = fbase + y0 * stride + x0;
+            debug_assert!(idx < src.feat.len());
+            let bytes = unsafe { _mm_loadl_epi64(feat.add(idx) as *const __m128i) };
+            let mut v = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes));
+            if flip {
+                v = _mm256_permutevar8x32_ps(v, swap);
+            }
+            let ti = trow + a;
+            debug_assert!(ti < tgt.cur.len());
+            let t = unsafe { _mm256_loadu_ps(cur.add(ti * LANES)) };
+            let d = _mm256_sub_ps(v, t);
+            acc = _mm256_add_ps(acc, _mm256_mul_ps(_mm256_mul_ps(wc, d), d));
+            if use_prev {
+                let p = unsafe { _mm256_loadu_ps(prev.add(ti * LANES)) };
+                let e = _mm256_sub_ps(v, p);
+                acc = _mm256_add_ps(acc, _mm256_mul_ps(_mm256_mul_ps(wp, e), e));
+            }
+            om += unsafe { *omega.get_unchecked(idx) };
+        }
+        let total = hsum(acc) + om;
+        if total > best {
+            return total;
+        }
+    }
+    hsum(acc) + om
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -155,9 +212,9 @@ fn kernel(
             let sx = cx + pad + (c * af - s * bf);
             let sy = cy + pad + (s * af + c * bf);
             // Nearest exemplar pixel of the tap; truncation is floor since padded coordinates
-            // are positive by the validity rule.
-            let x0 = (sx + 0.5) as i32 as usize;
-            let y0 = (sy + 0.5) as i32 as usize;
+            // are positive by the validity rule (so no saturating conversion is needed).
+            // SAFETY: sx, sy are finite and within the padded frame (validity rule).
+            let (x0, y0) = unsafe { ((sx + 0.5).to_int_unchecked::<i32>() as usize, (sy + 0.5).to_int_unchecked::<i32>() as usize) };
             let idx = fbase + y0 * stride + x0;
             debug_assert!(idx < feat.len() && sx >= 0.0 && sy >= 0.0);
             // SAFETY: idx lies in frame i's padded block (validity rule above).
@@ -357,7 +414,7 @@ mod speed {
         let tgt = TargetLevel::new(&tg, &pyr.quant, 10.0, None, [1.0, 1.0, 1.0]);
         let omega = vec![0.0f32; src.feat.len()];
         let mut rng = Rng::keyed(&[5]);
-        let n = 2_000_000;
+        let n: usize = std::env::var("FM_N").ok().and_then(|v| v.parse().ok()).unwrap_or(2_000_000);
         let cands: Vec<_> = (0..n)
             .map(|_| {
                 let list = &src.valid[1];

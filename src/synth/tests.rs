@@ -150,7 +150,8 @@ fn rotations_align_source_and_target_flows() {
         let (mut sum, mut n, mut flips, mut consistent) = (0.0f32, 0usize, 0usize, 0usize);
         for (q, m) in prev.nnf0.data.iter().enumerate() {
             let Some((_, inf)) = src.info_at(m.i as usize, m.x, m.y) else { continue };
-            if !m.ok || inf.dir == Vec2::ZERO || !target[2].mask.data()[q] {
+            let (x, y) = (q % prev.nnf0.w + prev.origin.0, q / prev.nnf0.w + prev.origin.1);
+            if !m.ok || inf.dir == Vec2::ZERO || !target[2].mask.get(x, y) {
                 continue;
             }
             // M·t̂ should be ±ŝ.

@@ -20,8 +20,11 @@ pub(crate) fn vote(src: &SourceLevel, nnf: &Nnf, fill: Rgb, sigma: f32) -> Vec<R
 /// [`vote`] with bicubic sampling when `cubic` (for the final output).
 pub(crate) fn vote_with(src: &SourceLevel, nnf: &Nnf, fill: Rgb, sigma: f32, cubic: bool) -> Vec<Rgb> {
     let (w, h) = (nnf.w, nnf.h);
-    let weights: Vec<f32> = offsets()
-        .map(|(a, b)| if sigma > 0.0 { (-((a * a + b * b) as f32) / (2.0 * sigma * sigma)).exp() } else { 1.0 })
+    // Offsets whose weight is below 2 % of the center's are skipped (with σ = 0.7 the 3 × 3
+    // core: the outer ring would add under 2 % each and cost two thirds of the work).
+    let taps: Vec<((isize, isize), f32)> = offsets()
+        .map(|(a, b)| ((a, b), if sigma > 0.0 { (-((a * a + b * b) as f32) / (2.0 * sigma * sigma)).exp() } else { 1.0 }))
+        .filter(|&(_, w)| w >= 0.02)
         .collect();
     let mut out = vec![fill; w * h];
     out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
@@ -31,7 +34,7 @@ pub(crate) fn vote_with(src: &SourceLevel, nnf: &Nnf, fill: Rgb, sigma: f32, cub
             }
             let mut acc = [0.0f32; 3];
             let mut n = 0.0f32;
-            for ((a, b), &wt) in offsets().zip(&weights) {
+            for &((a, b), wt) in &taps {
                 // The neighbour centered at (x − a, y − b) covers this pixel at its offset (a, b).
                 let (nx, ny) = (x as isize - a, y as isize - b);
                 if nx < 0 || ny < 0 || nx >= w as isize || ny >= h as isize {
