@@ -426,6 +426,9 @@ fn smooth_in_time(
     out
 }
 
+/// A frame index, its mask and its final flow (over the mask's bounding box).
+pub(crate) type FlowOutput = (usize, Arc<FrameMask>, Crop<Vec2>);
+
 /// Produces the final flows of a range of frames, visited forward or backward, keeping only a
 /// sliding window of masks, distance samples and raw flows in memory. The flow of a frame does
 /// not depend on where the machine started or which way it runs.
@@ -490,7 +493,7 @@ impl FlowMachine {
     }
 
     /// The next frame's index, mask and final flow (over the mask's bounding box).
-    pub fn next_output(&mut self, p: &mut dyn MaskProvider) -> Result<Option<(usize, Arc<FrameMask>, Crop<Vec2>)>> {
+    pub fn next_output(&mut self, p: &mut dyn MaskProvider) -> Result<Option<FlowOutput>> {
         let Some(i) = self.next else { return Ok(None) };
         let rf = self.cfg.rf;
         let (lo, hi) = (i.saturating_sub(rf), (i + rf).min(self.n - 1));
@@ -682,7 +685,7 @@ mod tests {
 
     #[test]
     fn components_are_labelled_separately() {
-        let m = Plane::from_fn(10, 5, |x, y| (x < 3 || x > 6) && y > 0);
+        let m = Plane::from_fn(10, 5, |x, y| !(3..=6).contains(&x) && y > 0);
         let fm = FrameMask::from_full(&m);
         let (labels, n) = label_components(&fm);
         assert_eq!(n, 2);
