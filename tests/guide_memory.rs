@@ -46,6 +46,7 @@ fn run_stream(n: usize) {
     let stream = GuideStream::new(n, |i| Ok(blob(i)), &params).unwrap();
     let stored = stream.stored_bytes();
     let (t1, c1) = (Instant::now(), cpu_seconds());
+    eprintln!("after the backward pass: {}", status("VmHWM"));
     let mut checksum = 0f64;
     for g in stream {
         let g = g.unwrap();

@@ -182,7 +182,7 @@ impl Task {
     }
 
     /// The raw flow `F_j` over the mask's bounding box (steps 2–4 of the module docs).
-    fn solve(&self, cfg: &FlowConfig) -> Crop<Vec2> {
+    fn solve(&self, cfg: &FlowConfig, solver: &mut laplace::Solver) -> Crop<Vec2> {
         let mask = &self.mask;
         let w = mask.w;
         // Step 2: normal speed and outward normal at each boundary pixel.
@@ -253,7 +253,7 @@ impl Task {
             cells.set(x - rect.x0, y - rect.y0, Cell::Fixed);
             values.set(x - rect.x0, y - rect.y0, g);
         }
-        let report = laplace::solve(&cells, &mut values, cfg.tolerance);
+        let report = solver.solve(&cells, &mut values, cfg.tolerance);
         if !report.converged {
             log::warn!(
                 "flow: the Laplace solve stopped after {} V-cycles at residual {} (tolerance {})",
@@ -450,6 +450,7 @@ pub(crate) struct FlowMachine {
     masks: BTreeMap<usize, Arc<FrameMask>>,
     tasks: BTreeMap<usize, Task>,
     flows: BTreeMap<usize, (Arc<FrameMask>, Arc<Crop<Vec2>>)>,
+    solver: laplace::Solver,
 }
 
 impl FlowMachine {
@@ -475,6 +476,7 @@ impl FlowMachine {
             masks: BTreeMap::new(),
             tasks: BTreeMap::new(),
             flows: BTreeMap::new(),
+            solver: laplace::Solver::default(),
         }
     }
 
@@ -550,7 +552,7 @@ impl FlowMachine {
             self.advance(p)?;
         }
         if let Some(task) = self.tasks.remove(&j) {
-            let f = task.solve(&self.cfg);
+            let f = task.solve(&self.cfg, &mut self.solver);
             self.flows.insert(j, (task.mask, Arc::new(f)));
         }
         Ok(())

@@ -233,25 +233,43 @@ impl<'a> NeighbourRows<'a> {
 }
 
 impl Level {
-    fn empty(w: usize, h: usize) -> Level {
+    /// A zeroed level of `w × h`, reusing the buffers of `old` when given (no new pages to
+    /// fault in). Five-point levels get `inv_deg` and `diag` but no stencils; nine-point levels
+    /// get all three.
+    fn reuse(old: Option<Level>, w: usize, h: usize, five_point: bool) -> Level {
         let (hw, hh) = (w.div_ceil(2), h.div_ceil(2));
         let n = (hw + 2) * (hh + 2);
-        let four = |v| [vec![v; n], vec![v; n], vec![v; n], vec![v; n]];
-        Level {
+        fn fill<T: Clone>(v: &mut [Vec<T>; 4], n: usize, value: T) {
+            for x in v.iter_mut() {
+                x.clear();
+                x.resize(n, value.clone());
+            }
+        }
+        let mut l = old.unwrap_or_else(|| Level {
             w,
             h,
             hw,
-            kind: [vec![NONE; n], vec![NONE; n], vec![NONE; n], vec![NONE; n]],
-            free: [vec![false; n], vec![false; n], vec![false; n], vec![false; n]],
-            a: [vec![[0.0; 9]; n], vec![[0.0; 9]; n], vec![[0.0; 9]; n], vec![[0.0; 9]; n]],
-            inv_deg: [Vec::new(), Vec::new(), Vec::new(), Vec::new()],
-            diag: [Vec::new(), Vec::new(), Vec::new(), Vec::new()],
-            u: four(Vec2::ZERO),
-            f: four(Vec2::ZERO),
-            r: four(Vec2::ZERO),
-            five_point: false,
+            kind: Default::default(),
+            free: Default::default(),
+            a: Default::default(),
+            inv_deg: Default::default(),
+            diag: Default::default(),
+            u: Default::default(),
+            f: Default::default(),
+            r: Default::default(),
+            five_point,
             interior: [0.0; 9],
-        }
+        });
+        (l.w, l.h, l.hw, l.five_point, l.interior) = (w, h, hw, five_point, [0.0; 9]);
+        fill(&mut l.kind, n, NONE);
+        fill(&mut l.free, n, false);
+        fill(&mut l.a, if five_point { 0 } else { n }, [0.0; 9]);
+        fill(&mut l.inv_deg, n, 0.0);
+        fill(&mut l.diag, n, 0.0);
+        fill(&mut l.u, n, Vec2::ZERO);
+        fill(&mut l.f, n, Vec2::ZERO);
+        fill(&mut l.r, n, Vec2::ZERO);
+        l
     }
 
     #[inline]
@@ -377,14 +395,14 @@ impl Level {
 
     /// The coarse level: unknowns at the free even pixels, operator `Pᵀ A P` (gathered per coarse
     /// node, in parallel over coarse rows); `None` when this grid should be the coarsest.
-    fn coarsen(&self) -> Option<Level> {
+    fn coarsen(&self, recycled: Option<Level>) -> Option<Level> {
         if self.w <= 3 || self.h <= 3 || self.free_count() <= 16 {
             return None;
         }
         // Coarse node (X, Y) sits on fine pixel (2X, 2Y); one node more than half, so that every
         // fine pixel has its parents on the grid.
         let (wc, hc) = (self.w / 2 + 1, self.h / 2 + 1);
-        let mut c = Level::empty(wc, hc);
+        let mut c = Level::reuse(recycled, wc, hc, false);
         for yc in 0..hc {
             for xc in 0..wc {
                 let (x, y) = (2 * xc, 2 * yc);
@@ -515,20 +533,30 @@ impl Level {
         let (wc, hc) = (coarse.w, coarse.h);
         let ckind_at =
             |x: usize, y: usize| if x < wc && y < hc { coarse.kind[class(x, y)][cg.idx(x, y)] } else { NONE };
-        // A fine pixel of class (qx, qy) reads coarse node (k, j) and, for odd coordinates,
-        // (k + 1) / (j + 1); coarse non-unknowns hold zero.
-        let cu = |x: usize, y: usize| coarse.u[class(x, y)][cg.idx(x, y)];
+        // The coarse values de-interleaved into one row-major grid, with one zero column and row
+        // of margin so that odd pixels can read their second parents without checks.
+        let cw1 = wc + 1;
+        let mut e = vec![Vec2::ZERO; cw1 * (hc + 1)];
+        e.par_chunks_mut(cw1).take(hc).enumerate().for_each(|(y, row)| {
+            for (x, v) in row.iter_mut().take(wc).enumerate() {
+                *v = coarse.u[class(x, y)][cg.idx(x, y)];
+            }
+        });
         for q in 0..4 {
             let (cw, ch) = g.class_dims(q);
             let (qx, qy) = (q & 1, q >> 1);
             let free = &self.free[q];
+            let e = &e;
             for_rows(&mut self.u[q], g.stride, ch, |row, out| {
                 let yc = row - 1;
                 let y = 2 * yc + qy;
+                let r0 = &e[yc * cw1..(yc + 1) * cw1];
+                let r1 = &e[(yc + 1) * cw1..(yc + 2) * cw1];
                 // Parents beyond the fine grid's far edge may be outside (Neumann): general path.
                 let y_edge = qy == 1 && y + 1 >= h;
-                for k in 1..=cw {
-                    if !free[row * g.stride + k] {
+                let free = &free[row * g.stride..(row + 1) * g.stride];
+                for (k, o) in out.iter_mut().enumerate().take(cw + 1).skip(1) {
+                    if !free[k] {
                         continue;
                     }
                     let xc = k - 1;
@@ -536,17 +564,16 @@ impl Level {
                     if y_edge || (qx == 1 && x + 1 >= w) {
                         let (p, n) = pweights(x, y, ckind_at);
                         for &(px, py, wt) in &p[..n] {
-                            out[k] += cu(px, py) * wt;
+                            *o += e[py * cw1 + px] * wt;
                         }
                         continue;
                     }
-                    let e = match (qx, qy) {
-                        (0, 0) => cu(xc, yc),
-                        (1, 0) => (cu(xc, yc) + cu(xc + 1, yc)) * 0.5,
-                        (0, _) => (cu(xc, yc) + cu(xc, yc + 1)) * 0.5,
-                        _ => (cu(xc, yc) + cu(xc + 1, yc) + cu(xc, yc + 1) + cu(xc + 1, yc + 1)) * 0.25,
+                    *o += match (qx, qy) {
+                        (0, 0) => r0[xc],
+                        (1, 0) => (r0[xc] + r0[xc + 1]) * 0.5,
+                        (0, _) => (r0[xc] + r1[xc]) * 0.5,
+                        _ => (r0[xc] + r0[xc + 1] + r1[xc] + r1[xc + 1]) * 0.25,
                     };
-                    out[k] += e;
                 }
             });
         }
@@ -644,13 +671,14 @@ fn vcycle(levels: &mut [Level]) {
 
 /// The fine system over `rect` of the cells (5-point stencil over the free pixels, fixed
 /// neighbours on the right-hand side) and its coarse levels.
-fn build(cells: &Plane<Cell>, values: &Plane<Vec2>, x0: usize, y0: usize, w: usize, h: usize) -> Vec<Level> {
+fn build(
+    cells: &Plane<Cell>,
+    values: &Plane<Vec2>,
+    (x0, y0, w, h): (usize, usize, usize, usize),
+    pool: &mut Vec<Level>,
+) -> Vec<Level> {
     let (iw, ih) = cells.size();
-    let mut fine = Level::empty(w, h);
-    fine.five_point = true;
-    fine.inv_deg = std::array::from_fn(|q| vec![0.0; fine.u[q].len()]);
-    fine.diag = std::array::from_fn(|q| vec![0.0; fine.u[q].len()]);
-    fine.a = std::array::from_fn(|_| Vec::new());
+    let mut fine = Level::reuse(pool.pop(), w, h, true);
     fine.interior = [0.0, -1.0, 0.0, -1.0, 4.0, -1.0, 0.0, -1.0, 0.0];
     let g = fine.geom();
     let none_row = vec![Cell::Outside; iw];
@@ -698,7 +726,7 @@ fn build(cells: &Plane<Cell>, values: &Plane<Vec2>, x0: usize, y0: usize, w: usi
         }
     }
     let mut levels = vec![fine];
-    while let Some(c) = levels.last().and_then(Level::coarsen) {
+    while let Some(c) = levels.last().and_then(|l| l.coarsen(pool.pop())) {
         levels.push(c);
     }
     levels
@@ -711,63 +739,85 @@ fn build(cells: &Plane<Cell>, values: &Plane<Vec2>, x0: usize, y0: usize, w: usi
 /// cells are set to zero. `tolerance` as in the module docs. Only the bounding box of the free
 /// cells (and their neighbours) is worked on.
 pub fn solve(cells: &Plane<Cell>, values: &mut Plane<Vec2>, tolerance: f32) -> SolveReport {
-    let (w, h) = cells.size();
-    assert_eq!(values.size(), (w, h), "cells and values must have the same size");
-    let scale = cells
-        .data()
-        .iter()
-        .zip(values.data())
-        .filter(|(c, _)| **c == Cell::Fixed)
-        .map(|(_, v)| v.length())
-        .fold(0f32, f32::max);
-    let threshold = tolerance.max(0.0) * scale;
-    if scale == 0.0 || !scale.is_finite() {
-        for (c, v) in cells.data().iter().zip(values.data_mut()) {
-            if *c == Cell::Free {
-                *v = Vec2::ZERO;
+    Solver::default().solve(cells, values, tolerance)
+}
+
+/// [`solve`] that keeps its grids between calls, so that solving one frame after another does
+/// not allocate (and fault in) fresh memory each time.
+#[derive(Default)]
+pub struct Solver {
+    pool: Vec<Level>,
+}
+
+impl std::fmt::Debug for Solver {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Solver({} grids kept)", self.pool.len())
+    }
+}
+
+impl Solver {
+    /// See [`solve`].
+    pub fn solve(&mut self, cells: &Plane<Cell>, values: &mut Plane<Vec2>, tolerance: f32) -> SolveReport {
+        let (w, h) = cells.size();
+        assert_eq!(values.size(), (w, h), "cells and values must have the same size");
+        let scale = cells
+            .data()
+            .iter()
+            .zip(values.data())
+            .filter(|(c, _)| **c == Cell::Fixed)
+            .map(|(_, v)| v.length())
+            .fold(0f32, f32::max);
+        let threshold = tolerance.max(0.0) * scale;
+        if scale == 0.0 || !scale.is_finite() {
+            for (c, v) in cells.data().iter().zip(values.data_mut()) {
+                if *c == Cell::Free {
+                    *v = Vec2::ZERO;
+                }
+            }
+            return SolveReport { cycles: 0, residual: 0.0, threshold, converged: scale == 0.0 };
+        }
+        // Bounding box of the free cells.
+        let (mut x0, mut y0, mut x1, mut y1) = (w, h, 0, 0);
+        for y in 0..h {
+            let row = cells.row(y);
+            if let Some(first) = row.iter().position(|c| *c == Cell::Free) {
+                let last = row.iter().rposition(|c| *c == Cell::Free).unwrap_or(first);
+                (x0, x1, y0, y1) = (x0.min(first), x1.max(last + 1), y0.min(y), y + 1);
             }
         }
-        return SolveReport { cycles: 0, residual: 0.0, threshold, converged: scale == 0.0 };
-    }
-    // Bounding box of the free cells.
-    let (mut x0, mut y0, mut x1, mut y1) = (w, h, 0, 0);
-    for y in 0..h {
-        let row = cells.row(y);
-        if let Some(first) = row.iter().position(|c| *c == Cell::Free) {
-            let last = row.iter().rposition(|c| *c == Cell::Free).unwrap_or(first);
-            (x0, x1, y0, y1) = (x0.min(first), x1.max(last + 1), y0.min(y), y + 1);
+        if x1 <= x0 {
+            return SolveReport { cycles: 0, residual: 0.0, threshold, converged: true };
         }
-    }
-    if x1 <= x0 {
-        return SolveReport { cycles: 0, residual: 0.0, threshold, converged: true };
-    }
-    // Grown by one pixel so the fixed cells around the free ones are on the grid: only the image
-    // edge may stay off it (a Neumann side).
-    (x0, y0, x1, y1) = (x0.saturating_sub(1), y0.saturating_sub(1), (x1 + 1).min(w), (y1 + 1).min(h));
-    let mut levels = build(cells, values, x0, y0, x1 - x0, y1 - y0);
-    let mut residual = levels[0].residual();
-    let mut cycles = 0;
-    while residual > threshold && cycles < MAX_CYCLES {
-        if levels.len() == 1 {
-            levels[0].smooth(false);
-        } else {
-            vcycle(&mut levels);
+        // Grown by one pixel so the fixed cells around the free ones are on the grid: only the image
+        // edge may stay off it (a Neumann side).
+        (x0, y0, x1, y1) = (x0.saturating_sub(1), y0.saturating_sub(1), (x1 + 1).min(w), (y1 + 1).min(h));
+        let mut levels = build(cells, values, (x0, y0, x1 - x0, y1 - y0), &mut self.pool);
+        let mut residual = levels[0].residual();
+        let mut cycles = 0;
+        while residual > threshold && cycles < MAX_CYCLES {
+            if levels.len() == 1 {
+                levels[0].smooth(false);
+            } else {
+                vcycle(&mut levels);
+            }
+            residual = levels[0].residual();
+            cycles += 1;
         }
-        residual = levels[0].residual();
-        cycles += 1;
-    }
-    let fine = &levels[0];
-    let g = fine.geom();
-    for y in 0..fine.h {
-        let row = values.row_mut(y0 + y);
-        for x in 0..fine.w {
-            let (q, i) = (class(x, y), g.idx(x, y));
-            if fine.free[q][i] {
-                row[x0 + x] = fine.u[q][i];
+        let fine = &levels[0];
+        let g = fine.geom();
+        for y in 0..fine.h {
+            let row = values.row_mut(y0 + y);
+            for x in 0..fine.w {
+                let (q, i) = (class(x, y), g.idx(x, y));
+                if fine.free[q][i] {
+                    row[x0 + x] = fine.u[q][i];
+                }
             }
         }
+        // Keep the grids, finest last, so the next solve takes the finest one first.
+        self.pool.extend(levels.into_iter().rev());
+        SolveReport { cycles, residual, threshold, converged: residual <= threshold }
     }
-    SolveReport { cycles, residual, threshold, converged: residual <= threshold }
 }
 
 /// The slow reference: lexicographic Gauss–Seidel in `f64` until `max ρ_c ≤ 10⁻¹²·max|u_fixed|`.
@@ -883,7 +933,7 @@ mod tests {
         // The test domain touches the image's left and bottom edges (Neumann sides).
         for (w, h) in [(200, 160), (201, 161), (96, 150)] {
             let (cells, values) = problem(w, h);
-            let mut levels = build(&cells, &values, 0, 0, w, h);
+            let mut levels = build(&cells, &values, (0, 0, w, h), &mut Vec::new());
             assert!(levels.len() >= 4);
             let mut r = levels[0].residual();
             for cycle in 0..4 {

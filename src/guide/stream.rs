@@ -131,7 +131,12 @@ impl<'p> GuideStreamBuilder<'p> {
             }
         })?;
         s.size = provider.size.unwrap_or((0, 0));
-        s.masks = provider.packed.into_iter().map(|m| m.ok_or(Error::Cancelled)).collect::<Result<_>>()?;
+        s.masks = provider
+            .packed
+            .into_iter()
+            .enumerate()
+            .map(|(i, m)| m.ok_or_else(|| Error::param("frame", i, "a frame read by the backward pass")))
+            .collect::<Result<_>>()?;
         s.acc_pos = Plane::new(s.size.0, s.size.1);
         Ok(s)
     }
@@ -173,10 +178,9 @@ pub struct GuideStream {
     failed: bool,
 }
 
-/// One segment's masks, and its final flows and `ext−` at the mask pixels of each frame.
+/// One segment's final flows and `ext−` at the mask pixels of each frame.
 struct SegmentBuf {
     start: usize,
-    masks: Vec<Arc<FrameMask>>,
     flows: Vec<Vec<Vec2>>,
     ext_neg: Vec<Vec<f32>>,
 }
@@ -239,13 +243,11 @@ impl GuideStream {
         let (w, h) = self.size;
         let start = k * self.seg_len;
         let end = (start + self.seg_len).min(self.n);
-        let mut masks = Vec::with_capacity(end - start);
         let mut flows = Vec::with_capacity(end - start);
         for i in start..end {
             let mask = self.mask(i);
             let f = self.forward_flow(i, &mask)?;
             flows.push(mask.gather(&f));
-            masks.push(mask);
         }
         let mut acc = match (end < self.n, &self.checkpoints[k]) {
             (true, Some(c)) => self.mask(end).scatter(c).to_full(w, h),
@@ -253,25 +255,25 @@ impl GuideStream {
         };
         let mut ext_neg = vec![Vec::new(); end - start];
         for i in (start..end).rev() {
-            let mask = &masks[i - start];
+            let mask = self.mask(i);
             if i + 1 < self.n {
-                accumulate(&mut acc, mask, &mask.scatter(&flows[i - start]));
+                accumulate(&mut acc, &mask, &mask.scatter(&flows[i - start]));
             }
             ext_neg[i - start] = mask.gather_plane(&acc).iter().map(|a| a.length()).collect();
         }
-        Ok(SegmentBuf { start, masks, flows, ext_neg })
+        Ok(SegmentBuf { start, flows, ext_neg })
     }
 
     fn emit(&mut self) -> Result<FrameGuides> {
         let i = self.next;
         let k = i / self.seg_len;
-        if self.seg.as_ref().is_none_or(|s| s.start != k * self.seg_len) {
-            self.seg = None;
-            self.seg = Some(self.load_segment(k)?);
-        }
-        let Some(seg) = &self.seg else { return Err(Error::Cancelled) };
-        let mask = seg.masks[i - seg.start].clone();
+        let seg = match self.seg.take() {
+            Some(seg) if seg.start == k * self.seg_len => seg,
+            _ => self.load_segment(k)?,
+        };
+        let mask = self.mask(i);
         let (flow, ext_neg) = (mask.scatter(&seg.flows[i - seg.start]), mask.scatter(&seg.ext_neg[i - seg.start]));
+        self.seg = Some(seg);
         if let Some(prev) = &self.prev_flow {
             accumulate(&mut self.acc_pos, &mask, prev);
         }
