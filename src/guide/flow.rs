@@ -182,7 +182,7 @@ impl Task {
     }
 
     /// The raw flow `F_j` over the mask's bounding box (steps 2–4 of the module docs).
-    fn solve(&self, cfg: &FlowConfig, solver: &mut laplace::Solver) -> Crop<Vec2> {
+    fn solve(&self, cfg: &FlowConfig) -> Crop<Vec2> {
         let mask = &self.mask;
         let w = mask.w;
         // Step 2: normal speed and outward normal at each boundary pixel.
@@ -253,7 +253,7 @@ impl Task {
             cells.set(x - rect.x0, y - rect.y0, Cell::Fixed);
             values.set(x - rect.x0, y - rect.y0, g);
         }
-        let report = solver.solve(&cells, &mut values, cfg.tolerance);
+        let report = laplace::solve(&cells, &mut values, cfg.tolerance);
         if !report.converged {
             log::warn!(
                 "flow: the Laplace solve stopped after {} V-cycles at residual {} (tolerance {})",
@@ -450,7 +450,6 @@ pub(crate) struct FlowMachine {
     masks: BTreeMap<usize, Arc<FrameMask>>,
     tasks: BTreeMap<usize, Task>,
     flows: BTreeMap<usize, (Arc<FrameMask>, Arc<Crop<Vec2>>)>,
-    solver: laplace::Solver,
 }
 
 impl FlowMachine {
@@ -476,7 +475,6 @@ impl FlowMachine {
             masks: BTreeMap::new(),
             tasks: BTreeMap::new(),
             flows: BTreeMap::new(),
-            solver: laplace::Solver::default(),
         }
     }
 
@@ -512,12 +510,16 @@ impl FlowMachine {
         for j in stale {
             self.flows.remove(&j);
         }
-        let horizon = match self.frontier {
-            Some(f) if self.ahead(f, i) < 0 => f,
-            _ => i,
-        };
-        let margin = (2 * self.cfg.rt + 2) as isize + rf;
-        let stale: Vec<usize> = self.masks.keys().copied().filter(|&k| self.ahead(k, horizon) < -margin).collect();
+        // Masks still needed: those of later outputs' windows (from i − rf + 1 on) and those
+        // that tasks created at the frontier look at (from frontier − 2·rt − 1 on).
+        let rt = self.cfg.rt as isize;
+        let frontier = self.frontier;
+        let stale: Vec<usize> = self
+            .masks
+            .keys()
+            .copied()
+            .filter(|&k| self.ahead(k, i) < 1 - rf && frontier.is_none_or(|f| self.ahead(k, f) < -2 * rt - 1))
+            .collect();
         for k in stale {
             self.masks.remove(&k);
         }
@@ -552,7 +554,7 @@ impl FlowMachine {
             self.advance(p)?;
         }
         if let Some(task) = self.tasks.remove(&j) {
-            let f = task.solve(&self.cfg, &mut self.solver);
+            let f = task.solve(&self.cfg);
             self.flows.insert(j, (task.mask, Arc::new(f)));
         }
         Ok(())

@@ -233,43 +233,29 @@ impl<'a> NeighbourRows<'a> {
 }
 
 impl Level {
-    /// A zeroed level of `w × h`, reusing the buffers of `old` when given (no new pages to
-    /// fault in). Five-point levels get `inv_deg` and `diag` but no stencils; nine-point levels
-    /// get all three.
-    fn reuse(old: Option<Level>, w: usize, h: usize, five_point: bool) -> Level {
+    /// A zeroed level of `w × h`. Five-point levels get `inv_deg` and `diag` but no stencils;
+    /// nine-point levels get all three.
+    fn new(w: usize, h: usize, five_point: bool) -> Level {
         let (hw, hh) = (w.div_ceil(2), h.div_ceil(2));
         let n = (hw + 2) * (hh + 2);
-        fn fill<T: Clone>(v: &mut [Vec<T>; 4], n: usize, value: T) {
-            for x in v.iter_mut() {
-                x.clear();
-                x.resize(n, value.clone());
-            }
+        fn four<T: Clone>(n: usize, v: T) -> [Vec<T>; 4] {
+            [vec![v.clone(); n], vec![v.clone(); n], vec![v.clone(); n], vec![v; n]]
         }
-        let mut l = old.unwrap_or_else(|| Level {
+        Level {
             w,
             h,
             hw,
-            kind: Default::default(),
-            free: Default::default(),
-            a: Default::default(),
-            inv_deg: Default::default(),
-            diag: Default::default(),
-            u: Default::default(),
-            f: Default::default(),
-            r: Default::default(),
+            kind: four(n, NONE),
+            free: four(n, false),
+            a: four(if five_point { 0 } else { n }, [0.0; 9]),
+            inv_deg: four(n, 0.0),
+            diag: four(n, 0.0),
+            u: four(n, Vec2::ZERO),
+            f: four(n, Vec2::ZERO),
+            r: four(n, Vec2::ZERO),
             five_point,
             interior: [0.0; 9],
-        });
-        (l.w, l.h, l.hw, l.five_point, l.interior) = (w, h, hw, five_point, [0.0; 9]);
-        fill(&mut l.kind, n, NONE);
-        fill(&mut l.free, n, false);
-        fill(&mut l.a, if five_point { 0 } else { n }, [0.0; 9]);
-        fill(&mut l.inv_deg, n, 0.0);
-        fill(&mut l.diag, n, 0.0);
-        fill(&mut l.u, n, Vec2::ZERO);
-        fill(&mut l.f, n, Vec2::ZERO);
-        fill(&mut l.r, n, Vec2::ZERO);
-        l
+        }
     }
 
     #[inline]
@@ -395,14 +381,14 @@ impl Level {
 
     /// The coarse level: unknowns at the free even pixels, operator `Pᵀ A P` (gathered per coarse
     /// node, in parallel over coarse rows); `None` when this grid should be the coarsest.
-    fn coarsen(&self, recycled: Option<Level>) -> Option<Level> {
+    fn coarsen(&self) -> Option<Level> {
         if self.w <= 3 || self.h <= 3 || self.free_count() <= 16 {
             return None;
         }
         // Coarse node (X, Y) sits on fine pixel (2X, 2Y); one node more than half, so that every
         // fine pixel has its parents on the grid.
         let (wc, hc) = (self.w / 2 + 1, self.h / 2 + 1);
-        let mut c = Level::reuse(recycled, wc, hc, false);
+        let mut c = Level::new(wc, hc, false);
         for yc in 0..hc {
             for xc in 0..wc {
                 let (x, y) = (2 * xc, 2 * yc);
@@ -671,14 +657,9 @@ fn vcycle(levels: &mut [Level]) {
 
 /// The fine system over `rect` of the cells (5-point stencil over the free pixels, fixed
 /// neighbours on the right-hand side) and its coarse levels.
-fn build(
-    cells: &Plane<Cell>,
-    values: &Plane<Vec2>,
-    (x0, y0, w, h): (usize, usize, usize, usize),
-    pool: &mut Vec<Level>,
-) -> Vec<Level> {
+fn build(cells: &Plane<Cell>, values: &Plane<Vec2>, (x0, y0, w, h): (usize, usize, usize, usize)) -> Vec<Level> {
     let (iw, ih) = cells.size();
-    let mut fine = Level::reuse(pool.pop(), w, h, true);
+    let mut fine = Level::new(w, h, true);
     fine.interior = [0.0, -1.0, 0.0, -1.0, 4.0, -1.0, 0.0, -1.0, 0.0];
     let g = fine.geom();
     let none_row = vec![Cell::Outside; iw];
@@ -726,7 +707,7 @@ fn build(
         }
     }
     let mut levels = vec![fine];
-    while let Some(c) = levels.last().and_then(|l| l.coarsen(pool.pop())) {
+    while let Some(c) = levels.last().and_then(Level::coarsen) {
         levels.push(c);
     }
     levels
@@ -739,25 +720,7 @@ fn build(
 /// cells are set to zero. `tolerance` as in the module docs. Only the bounding box of the free
 /// cells (and their neighbours) is worked on.
 pub fn solve(cells: &Plane<Cell>, values: &mut Plane<Vec2>, tolerance: f32) -> SolveReport {
-    Solver::default().solve(cells, values, tolerance)
-}
-
-/// [`solve`] that keeps its grids between calls, so that solving one frame after another does
-/// not allocate (and fault in) fresh memory each time.
-#[derive(Default)]
-pub struct Solver {
-    pool: Vec<Level>,
-}
-
-impl std::fmt::Debug for Solver {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "Solver({} grids kept)", self.pool.len())
-    }
-}
-
-impl Solver {
-    /// See [`solve`].
-    pub fn solve(&mut self, cells: &Plane<Cell>, values: &mut Plane<Vec2>, tolerance: f32) -> SolveReport {
+    {
         let (w, h) = cells.size();
         assert_eq!(values.size(), (w, h), "cells and values must have the same size");
         let scale = cells
@@ -791,7 +754,7 @@ impl Solver {
         // Grown by one pixel so the fixed cells around the free ones are on the grid: only the image
         // edge may stay off it (a Neumann side).
         (x0, y0, x1, y1) = (x0.saturating_sub(1), y0.saturating_sub(1), (x1 + 1).min(w), (y1 + 1).min(h));
-        let mut levels = build(cells, values, (x0, y0, x1 - x0, y1 - y0), &mut self.pool);
+        let mut levels = build(cells, values, (x0, y0, x1 - x0, y1 - y0));
         let mut residual = levels[0].residual();
         let mut cycles = 0;
         while residual > threshold && cycles < MAX_CYCLES {
@@ -814,8 +777,6 @@ impl Solver {
                 }
             }
         }
-        // Keep the grids, finest last, so the next solve takes the finest one first.
-        self.pool.extend(levels.into_iter().rev());
         SolveReport { cycles, residual, threshold, converged: residual <= threshold }
     }
 }
@@ -933,7 +894,7 @@ mod tests {
         // The test domain touches the image's left and bottom edges (Neumann sides).
         for (w, h) in [(200, 160), (201, 161), (96, 150)] {
             let (cells, values) = problem(w, h);
-            let mut levels = build(&cells, &values, (0, 0, w, h), &mut Vec::new());
+            let mut levels = build(&cells, &values, (0, 0, w, h));
             assert!(levels.len() >= 4);
             let mut r = levels[0].residual();
             for cycle in 0..4 {

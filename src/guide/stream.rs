@@ -53,16 +53,17 @@ pub struct GuideStreamBuilder<'p> {
 }
 
 impl<'p> GuideStreamBuilder<'p> {
-    /// Frames per segment of the forward iteration (`K`; each segment's flows are estimated a
-    /// second time, and `n/K` checkpoints are kept). Default: `⌈√n⌉`.
+    /// Frames per segment of the forward iteration, `K`: `n/K` checkpoints of `acc−` and one
+    /// segment of `K` frames' flows and `ext−` are kept (both at the mask pixels), so `K ≈ √n`
+    /// keeps the sum small. Default: `⌈√n⌉`.
     pub fn segment_len(mut self, k: usize) -> Self {
         self.segment_len = Some(k.max(1));
         self
     }
 
     /// Uses these flow fields instead of estimating them: `source(i)` is the motion from frame `i`
-    /// to `i+1` in pixels per frame (e.g. read with [`super::flo::read_flo`]); it is called about
-    /// twice per frame. Inside the mask it is used as given, outside it is set to zero.
+    /// to `i+1` in pixels per frame (e.g. read with [`super::flo::read_flo`]); it is called twice
+    /// per frame (backward pass, then in order). Inside the mask it is used as given, outside it is set to zero.
     /// Default: estimated from the masks.
     pub fn flow_source(mut self, source: impl FnMut(usize) -> Result<Plane<Vec2>> + Send + 'static) -> Self {
         self.flow = Some(Box::new(source));
@@ -210,8 +211,8 @@ impl GuideStream {
         self.size
     }
 
-    /// Bytes held between frames by the stored masks and checkpoints (not counting the current
-    /// segment and the working planes).
+    /// Bytes held between frames by the stored masks and the checkpoints not used yet (not
+    /// counting the current segment and the working planes).
     pub fn stored_bytes(&self) -> usize {
         self.masks.iter().map(PackedMask::bytes).sum::<usize>()
             + self.checkpoints.iter().flatten().map(|c| c.len() * std::mem::size_of::<Vec2>()).sum::<usize>()
@@ -249,8 +250,9 @@ impl GuideStream {
             let f = self.forward_flow(i, &mask)?;
             flows.push(mask.gather(&f));
         }
-        let mut acc = match (end < self.n, &self.checkpoints[k]) {
-            (true, Some(c)) => self.mask(end).scatter(c).to_full(w, h),
+        // The checkpoint is used once: free it.
+        let mut acc = match (end < self.n, self.checkpoints[k].take()) {
+            (true, Some(c)) => self.mask(end).scatter(&c).to_full(w, h),
             _ => Plane::new(w, h),
         };
         let mut ext_neg = vec![Vec::new(); end - start];
@@ -269,7 +271,10 @@ impl GuideStream {
         let k = i / self.seg_len;
         let seg = match self.seg.take() {
             Some(seg) if seg.start == k * self.seg_len => seg,
-            _ => self.load_segment(k)?,
+            old => {
+                drop(old); // before the next segment is built
+                self.load_segment(k)?
+            }
         };
         let mask = self.mask(i);
         let (flow, ext_neg) = (mask.scatter(&seg.flows[i - seg.start]), mask.scatter(&seg.ext_neg[i - seg.start]));
