@@ -234,16 +234,11 @@ impl Task {
             vec![Affine::ZERO; ncomp]
         };
         // Step 4: Laplace with the boundary values fixed.
-        let (rw, rh) = (rect.width(), rect.height());
-        let mut cells =
-            Plane::from_fn(
-                rw,
-                rh,
-                |x, y| if mask.contains(x + rect.x0, y + rect.y0) { Cell::Free } else { Cell::Outside },
-            );
-        let mut values = Plane::from_fn(rw, rh, |x, y| {
+        // The mask's crop covers exactly its bounding box.
+        let mut cells = mask.crop.plane.map(|inside| if inside { Cell::Free } else { Cell::Outside });
+        let mut values = Plane::from_fn(rect.width(), rect.height(), |x, y| {
             let (gx, gy) = (x + rect.x0, y + rect.y0);
-            if mask.contains(gx, gy) { fits[label_of(gx, gy) as usize].at(gx, gy) } else { Vec2::ZERO }
+            if cells.get(x, y) == Cell::Free { fits[label_of(gx, gy) as usize].at(gx, gy) } else { Vec2::ZERO }
         });
         for (bi, &b) in mask.boundary.iter().enumerate() {
             let (x, y) = (b as usize % w, b as usize / w);

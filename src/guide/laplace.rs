@@ -719,6 +719,10 @@ fn build(cells: &Plane<Cell>, values: &Plane<Vec2>, (x0, y0, w, h): (usize, usiz
 /// an arbitrary constant (Neumann everywhere); with no fixed value at all, or only zero ones, free
 /// cells are set to zero. `tolerance` as in the module docs. Only the bounding box of the free
 /// cells (and their neighbours) is worked on.
+///
+/// # Panics
+///
+/// If `cells` and `values` differ in size (a programming error: both describe the same grid).
 pub fn solve(cells: &Plane<Cell>, values: &mut Plane<Vec2>, tolerance: f32) -> SolveReport {
     {
         let (w, h) = cells.size();

@@ -16,7 +16,11 @@
 //!
 //! Peak memory is then a few full-frame planes, the two windows (one at a time), `n/K`
 //! checkpoints and one segment — `O(√n)` frames' worth of mask pixels — for twice the flow
-//! computations of the in-memory path. The results are identical to
+//! computations of the in-memory path. What grows with the sequence: one bit per pixel of each
+//! mask's bounding box, 8 bytes per mask pixel per checkpoint and 12 bytes per mask pixel per
+//! segment frame. Measured (`tests/guide_memory.rs`): 400 frames of 1000×800 with a moving blob
+//! covering ~18 % of the frame peak at 134 MB resident for the whole test process (82 MB after
+//! the backward pass; 29.5 MB of masks and checkpoints). The results are identical to
 //! [`super::compute_sequence`]'s.
 
 use super::crop::{Crop, FrameMask, PackedMask};
@@ -244,11 +248,13 @@ impl GuideStream {
         let (w, h) = self.size;
         let start = k * self.seg_len;
         let end = (start + self.seg_len).min(self.n);
+        let mut masks = Vec::with_capacity(end - start);
         let mut flows = Vec::with_capacity(end - start);
         for i in start..end {
             let mask = self.mask(i);
             let f = self.forward_flow(i, &mask)?;
             flows.push(mask.gather(&f));
+            masks.push(mask);
         }
         // The checkpoint is used once: free it.
         let mut acc = match (end < self.n, self.checkpoints[k].take()) {
@@ -257,9 +263,9 @@ impl GuideStream {
         };
         let mut ext_neg = vec![Vec::new(); end - start];
         for i in (start..end).rev() {
-            let mask = self.mask(i);
+            let mask = &masks[i - start];
             if i + 1 < self.n {
-                accumulate(&mut acc, &mask, &mask.scatter(&flows[i - start]));
+                accumulate(&mut acc, mask, &mask.scatter(&flows[i - start]));
             }
             ext_neg[i - start] = mask.gather_plane(&acc).iter().map(|a| a.length()).collect();
         }
