@@ -19,7 +19,7 @@
 //! computations of the in-memory path. What grows with the sequence: one bit per pixel of each
 //! mask's bounding box, 8 bytes per mask pixel per checkpoint and 12 bytes per mask pixel per
 //! segment frame. Measured (`tests/guide_memory.rs`): 400 frames of 1000×800 with a moving blob
-//! covering ~18 % of the frame peak at 134 MB resident for the whole test process (82 MB after
+//! covering ~18 % of the frame peak at 142 MB resident for the whole test process (79 MB after
 //! the backward pass; 29.5 MB of masks and checkpoints). The results are identical to
 //! [`super::compute_sequence`]'s.
 
