@@ -119,3 +119,15 @@ fn empty_frames_get_sane_guides() {
     assert!(g[3].ext_pos.data().iter().all(|&e| e == 0.0));
     assert!(g.iter().all(|f| f.flow.data().iter().all(|v| v.is_finite())));
 }
+
+#[test]
+fn flow_estimate_alone_matches_the_full_guides() {
+    let frames: Vec<_> = (0..14).map(frame).collect();
+    let g = compute_sequence(&frames, &params()).unwrap();
+    let masks: Vec<_> = g.iter().map(|f| f.mask.clone()).collect();
+    let flows = fluidymation::guide::flow::estimate_sequence(&masks, &params()).unwrap();
+    assert_eq!(flows.len(), g.len());
+    for (f, gi) in flows.iter().zip(&g) {
+        assert!(*f == gi.flow);
+    }
+}

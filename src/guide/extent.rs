@@ -74,15 +74,13 @@ pub fn compute_sequence_with_flow(
 /// A user flow field restricted to the mask (zero elsewhere), over the mask's bounding box.
 pub(crate) fn masked_user_flow(mask: &FrameMask, flow: &Plane<Vec2>) -> Crop<Vec2> {
     let r = mask.rect();
-    let mut c = Crop::new(r);
-    for y in r.y0..r.y1 {
-        for x in r.x0..r.x1 {
-            if mask.contains(x, y) {
-                c.plane.set(x - r.x0, y - r.y0, flow.get(x, y));
-            }
-        }
+    let inside = &mask.crop.plane;
+    Crop {
+        rect: r,
+        plane: Plane::from_fn(r.width(), r.height(), |x, y| {
+            if inside.get(x, y) { flow.get(x + r.x0, y + r.y0) } else { Vec2::ZERO }
+        }),
     }
-    c
 }
 
 fn compute(coverages: &[Plane<f32>], user: Option<&[Plane<Vec2>]>, params: &GuideParams) -> Result<Vec<FrameGuides>> {

@@ -234,16 +234,11 @@ impl Task {
             vec![Affine::ZERO; ncomp]
         };
         // Step 4: Laplace with the boundary values fixed.
-        let (rw, rh) = (rect.width(), rect.height());
-        let mut cells =
-            Plane::from_fn(
-                rw,
-                rh,
-                |x, y| if mask.contains(x + rect.x0, y + rect.y0) { Cell::Free } else { Cell::Outside },
-            );
-        let mut values = Plane::from_fn(rw, rh, |x, y| {
+        // The mask's crop covers exactly its bounding box.
+        let mut cells = mask.crop.plane.map(|inside| if inside { Cell::Free } else { Cell::Outside });
+        let mut values = Plane::from_fn(rect.width(), rect.height(), |x, y| {
             let (gx, gy) = (x + rect.x0, y + rect.y0);
-            if mask.contains(gx, gy) { fits[label_of(gx, gy) as usize].at(gx, gy) } else { Vec2::ZERO }
+            if cells.get(x, y) == Cell::Free { fits[label_of(gx, gy) as usize].at(gx, gy) } else { Vec2::ZERO }
         });
         for (bi, &b) in mask.boundary.iter().enumerate() {
             let (x, y) = (b as usize % w, b as usize / w);
@@ -426,6 +421,9 @@ fn smooth_in_time(
     out
 }
 
+/// A frame index, its mask and its final flow (over the mask's bounding box).
+pub(crate) type FlowOutput = (usize, Arc<FrameMask>, Crop<Vec2>);
+
 /// Produces the final flows of a range of frames, visited forward or backward, keeping only a
 /// sliding window of masks, distance samples and raw flows in memory. The flow of a frame does
 /// not depend on where the machine started or which way it runs.
@@ -490,7 +488,7 @@ impl FlowMachine {
     }
 
     /// The next frame's index, mask and final flow (over the mask's bounding box).
-    pub fn next_output(&mut self, p: &mut dyn MaskProvider) -> Result<Option<(usize, Arc<FrameMask>, Crop<Vec2>)>> {
+    pub fn next_output(&mut self, p: &mut dyn MaskProvider) -> Result<Option<FlowOutput>> {
         let Some(i) = self.next else { return Ok(None) };
         let rf = self.cfg.rf;
         let (lo, hi) = (i.saturating_sub(rf), (i + rf).min(self.n - 1));
@@ -507,12 +505,16 @@ impl FlowMachine {
         for j in stale {
             self.flows.remove(&j);
         }
-        let horizon = match self.frontier {
-            Some(f) if self.ahead(f, i) < 0 => f,
-            _ => i,
-        };
-        let margin = (2 * self.cfg.rt + 2) as isize + rf;
-        let stale: Vec<usize> = self.masks.keys().copied().filter(|&k| self.ahead(k, horizon) < -margin).collect();
+        // Masks still needed: those of later outputs' windows (from i − rf + 1 on) and those
+        // that tasks created at the frontier look at (from frontier − 2·rt − 1 on).
+        let rt = self.cfg.rt as isize;
+        let frontier = self.frontier;
+        let stale: Vec<usize> = self
+            .masks
+            .keys()
+            .copied()
+            .filter(|&k| self.ahead(k, i) < 1 - rf && frontier.is_none_or(|f| self.ahead(k, f) < -2 * rt - 1))
+            .collect();
         for k in stale {
             self.masks.remove(&k);
         }
@@ -682,7 +684,7 @@ mod tests {
 
     #[test]
     fn components_are_labelled_separately() {
-        let m = Plane::from_fn(10, 5, |x, y| (x < 3 || x > 6) && y > 0);
+        let m = Plane::from_fn(10, 5, |x, y| !(3..=6).contains(&x) && y > 0);
         let fm = FrameMask::from_full(&m);
         let (labels, n) = label_components(&fm);
         assert_eq!(n, 2);

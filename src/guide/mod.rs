@@ -7,14 +7,32 @@
 //! * the border channel `I^df = min(I^dist / b, 1)` ([`FrameGuides::df`]) and the
 //!   border/interior segmentation ([`FrameGuides::segments`]);
 //! * the flow field `I^flow` (boundary values from distance-field differences, diffused into
-//!   the interior by a multigrid Laplace solve, smoothed in time; [`flow`]);
+//!   the interior by a multigrid Laplace solve, smoothed in time; [`flow`], [`laplace`]), or
+//!   user-supplied flow fields ([`compute_sequence_with_flow`], [`flo`]);
 //! * motion extent `I^ext+` / `I^ext−` (norms of the 2D flow accumulated forward / backward in
 //!   time, reset outside the mask; [`extent`]);
-//! * direction `I^dir = atan2(I^flow)` ([`FrameGuides::dir`]).
+//! * direction `I^dir = atan2(I^flow)` ([`FrameGuides::dir`]);
+//! * pictures of all of them ([`preview`]).
 //!
 //! Two entry points: [`compute_sequence`] holds a whole (short) sequence in memory, as for an
 //! exemplar; [`GuideStream`] yields the guides of a long target frame by frame in bounded
-//! memory. Both give bit-identical results.
+//! memory. Both give bit-identical results, independent of the number of threads.
+//!
+//! # Conventions
+//!
+//! * **Distance**: pixel centres at integer coordinates; `dist = ±(distance to the nearest pixel
+//!   of the other set − ½)`, so the rim pixels are at ±½ and the zero level lies on the pixel
+//!   edges. An empty or full mask has `dist = ∓`/`±` the image diagonal everywhere.
+//! * **Boundary pixels**: mask pixels with a 4-neighbour inside the image that is not in the
+//!   mask; the image edge is not a boundary (the flow has a zero normal derivative there).
+//! * **Flow**: `flow(i)` is the motion from frame `i` to `i + 1` on the mask of frame `i`, so the
+//!   paper's `acc+(i) = acc+(i−1) + flow(i−1)` and `acc−(i) = acc−(i+1) + flow(i)` hold as
+//!   written. Appendix A's sign is flipped for a positive-inside distance (see [`flow`]).
+//! * **Laplace tolerance**: the solve stops when every interior pixel is within
+//!   `laplace_tolerance · max |boundary flow|` (10⁻⁴) of its neighbours' mean ([`laplace`]).
+//! * **Ends**: frames beyond the sequence, or beyond a run of non-empty masks, are replaced by
+//!   the nearest frame of the run in the temporal filters; `acc+` starts at 0 on the first frame,
+//!   `acc−` is 0 on the last.
 //!
 //! All lengths (distances, flow, extents) are in pixels of the sequence the guides were
 //! computed on; [`FrameGuides::downsample2`] keeps them in those full-resolution units.

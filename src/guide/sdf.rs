@@ -28,128 +28,174 @@ const STRIP: usize = 64;
 
 /// The exact signed Euclidean distance field of `mask`, positive inside (see the module docs for
 /// the ½-pixel convention and the value for masks without a boundary).
+///
+/// Only what can matter is computed: the distance to the nearest inside pixel (needed by every
+/// outside pixel) from parabolas whose apexes lie in the columns of the mask's bounding box, and
+/// the distance to the nearest outside pixel (needed by the inside pixels) inside that box grown
+/// by one pixel, where that nearest outside pixel always is.
 pub fn sdf(mask: &Mask) -> Plane<f32> {
     let (w, h) = mask.size();
     if w == 0 || h == 0 {
         return Plane::new(w, h);
     }
-    let count = mask.count();
+    // Bounding box of the inside pixels.
+    let (mut x0, mut x1, mut y0, mut y1, mut count) = (w, 0, h, 0, 0usize);
+    for y in 0..h {
+        let row = mask.row(y);
+        if let Some(first) = row.iter().position(|&b| b) {
+            let last = row.iter().rposition(|&b| b).unwrap_or(first);
+            (x0, x1, y0, y1) = (x0.min(first), x1.max(last + 1), y0.min(y), y + 1);
+            count += row[first..=last].iter().filter(|&&b| b).count();
+        }
+    }
     if count == 0 || count == w * h {
         let d = no_boundary_distance(w, h);
         return Plane::filled(w, h, if count == 0 { -d } else { d });
     }
     // "No feature in this column" is a vertical distance larger than any real one.
     let inf = (w + h) as u32;
-    // Phase 1: per column, the vertical distance to the nearest inside pixel (`g_in`) and to
-    // the nearest outside pixel (`g_out`), in strips of columns.
-    let strips: Vec<(Vec<u32>, Vec<u32>)> = (0..w.div_ceil(STRIP))
-        .into_par_iter()
-        .map(|s| {
-            let x0 = s * STRIP;
-            let sw = STRIP.min(w - x0);
-            let mut gi = vec![0u32; sw * h];
-            let mut go = vec![0u32; sw * h];
-            for y in 0..h {
-                let m = &mask.row(y)[x0..x0 + sw];
-                for i in 0..sw {
-                    let (pi, po) = if y == 0 { (inf, inf) } else { (gi[(y - 1) * sw + i], go[(y - 1) * sw + i]) };
-                    gi[y * sw + i] = if m[i] { 0 } else { (pi + 1).min(inf) };
-                    go[y * sw + i] = if m[i] { (po + 1).min(inf) } else { 0 };
-                }
-            }
-            for y in (0..h - 1).rev() {
-                for i in 0..sw {
-                    let (ni, no) = (gi[(y + 1) * sw + i] + 1, go[(y + 1) * sw + i] + 1);
-                    gi[y * sw + i] = gi[y * sw + i].min(ni);
-                    go[y * sw + i] = go[y * sw + i].min(no);
-                }
-            }
-            (gi, go)
-        })
-        .collect();
+    // Phase 1: per column, the vertical distance to the nearest inside pixel over the whole
+    // height (columns x0..x1), and to the nearest outside pixel inside the grown box.
+    let (ox0, ox1, oy0, oy1) = (x0.saturating_sub(1), (x1 + 1).min(w), y0.saturating_sub(1), (y1 + 1).min(h));
+    let g_in = column_distances(mask, x0, x1, 0, h, true, inf);
+    let g_out = column_distances(mask, ox0, ox1, oy0, oy1, false, inf);
     // Phase 2: per row, the lower envelope of parabolas.
     let mut out = Plane::new(w, h);
     out.data_mut().par_chunks_mut(w).enumerate().for_each_init(
         || RowScratch::new(w),
         |sc, (y, row)| {
-            for (s, (gi, go)) in strips.iter().enumerate() {
-                let x0 = s * STRIP;
-                let sw = STRIP.min(w - x0);
-                sc.g_in[x0..x0 + sw].copy_from_slice(&gi[y * sw..(y + 1) * sw]);
-                sc.g_out[x0..x0 + sw].copy_from_slice(&go[y * sw..(y + 1) * sw]);
-            }
-            let RowScratch { g_in, g_out, s, t, d_in, d_out } = sc;
-            edt_row(g_out, s, t, d_out);
-            edt_row(g_in, s, t, d_in);
+            g_in.row(y, &mut sc.g[..x1 - x0]);
+            envelope(&sc.g[..x1 - x0], x0, 0, w, &mut sc.s, &mut sc.t, &mut sc.d);
             let m = mask.row(y);
-            for x in 0..w {
-                row[x] =
-                    if m[x] { (d_out[x] as f64).sqrt() as f32 - 0.5 } else { 0.5 - (d_in[x] as f64).sqrt() as f32 };
+            for (o, &d) in row.iter_mut().zip(&sc.d) {
+                *o = 0.5 - (d as f64).sqrt() as f32;
+            }
+            if (y0..y1).contains(&y) {
+                g_out.row(y - oy0, &mut sc.g[..ox1 - ox0]);
+                envelope(&sc.g[..ox1 - ox0], ox0, x0, x1, &mut sc.s, &mut sc.t, &mut sc.d);
+                for x in x0..x1 {
+                    if m[x] {
+                        row[x] = (sc.d[x] as f64).sqrt() as f32 - 0.5;
+                    }
+                }
             }
         },
     );
     out
 }
 
+/// Vertical distances of phase 1 for columns `cx0..cx1` and rows `ry0..ry1`, to the nearest
+/// pixel whose mask value is `target`, stored in strips of [`STRIP`] columns.
+struct ColumnDistances {
+    cx0: usize,
+    cx1: usize,
+    strips: Vec<Vec<u32>>,
+}
+
+impl ColumnDistances {
+    /// Row `r` (relative to `ry0`) into `out` (`cx1 − cx0` values).
+    fn row(&self, r: usize, out: &mut [u32]) {
+        for (k, strip) in self.strips.iter().enumerate() {
+            let sx = k * STRIP;
+            let sw = STRIP.min(self.cx1 - self.cx0 - sx);
+            out[sx..sx + sw].copy_from_slice(&strip[r * sw..(r + 1) * sw]);
+        }
+    }
+}
+
+fn column_distances(
+    mask: &Mask,
+    cx0: usize,
+    cx1: usize,
+    ry0: usize,
+    ry1: usize,
+    target: bool,
+    inf: u32,
+) -> ColumnDistances {
+    let n = ry1 - ry0;
+    let strips = (0..(cx1 - cx0).div_ceil(STRIP))
+        .into_par_iter()
+        .map(|k| {
+            let x0 = cx0 + k * STRIP;
+            let sw = STRIP.min(cx1 - x0);
+            let mut g = vec![0u32; sw * n];
+            for r in 0..n {
+                let m = &mask.row(ry0 + r)[x0..x0 + sw];
+                for i in 0..sw {
+                    let prev = if r == 0 { inf } else { g[(r - 1) * sw + i] };
+                    g[r * sw + i] = if m[i] == target { 0 } else { (prev + 1).min(inf) };
+                }
+            }
+            for r in (0..n.saturating_sub(1)).rev() {
+                for i in 0..sw {
+                    let below = g[(r + 1) * sw + i] + 1;
+                    g[r * sw + i] = g[r * sw + i].min(below);
+                }
+            }
+            g
+        })
+        .collect();
+    ColumnDistances { cx0, cx1, strips }
+}
+
 struct RowScratch {
-    g_in: Vec<u32>,
-    g_out: Vec<u32>,
+    g: Vec<u32>,
     s: Vec<usize>,
-    t: Vec<usize>,
-    d_in: Vec<i64>,
-    d_out: Vec<i64>,
+    t: Vec<f64>,
+    d: Vec<i64>,
 }
 
 impl RowScratch {
     fn new(w: usize) -> Self {
-        RowScratch {
-            g_in: vec![0; w],
-            g_out: vec![0; w],
-            s: vec![0; w],
-            t: vec![0; w],
-            d_in: vec![0; w],
-            d_out: vec![0; w],
-        }
+        RowScratch { g: vec![0; w], s: vec![0; w], t: vec![0.0; w], d: vec![0; w] }
     }
 }
 
-/// Meijster's second phase on one row: `out[x] = min_i (x − i)² + g[i]²`, exact in integers.
-fn edt_row(g: &[u32], s: &mut [usize], t: &mut [usize], out: &mut [i64]) {
-    let n = g.len();
-    let gg = |i: usize| (g[i] as i64) * (g[i] as i64);
-    let f = |x: usize, i: usize| {
-        let d = x as i64 - i as i64;
-        d * d + gg(i)
+/// Meijster's second phase on one row: `out[x] = min_i (x − i)² + g_i²` for `x` in `e0..e1`,
+/// over apex columns `i = c0 + k` with vertical distances `g[k]`. The squared distances are
+/// exact integers; the separation points are computed in `f64`, which decides every comparison
+/// exactly (numerators and denominators are integers far below 2⁵³, and a quotient that is not
+/// an integer is at least 1/denominator away from one).
+fn envelope(g: &[u32], c0: usize, e0: usize, e1: usize, s: &mut [usize], t: &mut [f64], out: &mut [i64]) {
+    let gg = |i: usize| {
+        let v = g[i - c0] as i64;
+        v * v
     };
-    // The first x at which the parabola of `u` lies below that of `i` (i < u).
+    // Where the parabola of `u` starts to lie below that of `i` (i < u).
     let sep = |i: usize, u: usize| {
         let (ii, uu) = (i as i64, u as i64);
-        (uu * uu - ii * ii + gg(u) - gg(i)).div_euclid(2 * (uu - ii))
+        (uu * uu - ii * ii + gg(u) - gg(i)) as f64 / (2 * (uu - ii)) as f64
     };
-    let mut q: isize = 0;
-    s[0] = 0;
-    t[0] = 0;
-    for u in 1..n {
-        while q >= 0 && f(t[q as usize], s[q as usize]) > f(t[q as usize], u) {
-            q -= 1;
-        }
-        if q < 0 {
-            q = 0;
-            s[0] = u;
-        } else {
-            let wv = 1 + sep(s[q as usize], u);
-            if wv < n as i64 {
-                q += 1;
-                s[q as usize] = u;
-                t[q as usize] = wv as usize;
+    let mut q = 0;
+    s[0] = c0;
+    t[0] = f64::NEG_INFINITY;
+    for u in c0 + 1..c0 + g.len() {
+        let mut x = sep(s[q], u);
+        while x <= t[q] {
+            // The new parabola is below parabola q everywhere q was lowest: drop q.
+            if q == 0 {
+                break;
             }
+            q -= 1;
+            x = sep(s[q], u);
+        }
+        if q == 0 && x <= t[0] {
+            s[0] = u;
+            continue;
+        }
+        if x < e1 as f64 {
+            q += 1;
+            s[q] = u;
+            t[q] = x;
         }
     }
-    for u in (0..n).rev() {
-        out[u] = f(u, s[q as usize]);
-        if u == t[q as usize] {
-            q -= 1;
+    let mut k = 0;
+    for (x, o) in out.iter_mut().enumerate().take(e1).skip(e0) {
+        while k < q && t[k + 1] <= x as f64 {
+            k += 1;
         }
+        let d = x as i64 - s[k] as i64;
+        *o = d * d + gg(s[k]);
     }
 }
 
@@ -218,6 +264,21 @@ mod tests {
         let empty = sdf(&Plane::filled(3, 4, false));
         assert!(empty.data().iter().all(|&v| v == -5.0));
         assert!(sdf(&Plane::new(0, 3)).is_empty());
+    }
+
+    #[test]
+    fn crop_and_edge_cases_match_brute_force() {
+        // Touching every image edge, two components, a one-column gap, thin lines.
+        let cases = [
+            Plane::from_fn(30, 20, |x, y| x < 4 || y == 19 || (10..12).contains(&x) && y > 5),
+            Plane::from_fn(25, 25, |x, y| (x + y) % 7 == 0),
+            Plane::from_fn(40, 9, |x, y| (5..9).contains(&x) && y > 2 || (11..30).contains(&x) && y < 3),
+            Plane::from_fn(1, 12, |_, y| y == 4),
+            Plane::from_fn(12, 1, |x, _| x != 4),
+        ];
+        for m in cases {
+            assert_eq!(sdf(&m), sdf_brute_force(&m));
+        }
     }
 
     #[test]
