@@ -3,7 +3,10 @@
 //! stylized with a 400 × 222 × 20 exemplar (paper Table 2).
 
 use crate::error::Result;
-use crate::exemplar::{Exemplar, generate::{GeneratorParams, generate}};
+use crate::exemplar::{
+    Exemplar,
+    generate::{GeneratorParams, generate},
+};
 use crate::img::Plane;
 use crate::progress::NoProgress;
 

@@ -421,7 +421,8 @@ impl Synthesizer {
                         timed(&mut st.refresh, || patchmatch::refresh_errors(&ctx, &mut field));
                         energy.push((l, mean_err(&field)));
                         evaluations += tgt.active.len() as u64;
-                        evaluations += timed(&mut st.patchmatch, || patchmatch::sweep(&ctx, &mut field, it)).evaluations;
+                        evaluations +=
+                            timed(&mut st.patchmatch, || patchmatch::sweep(&ctx, &mut field, it)).evaluations;
                     }
                     energy.push((l, mean_err(&field)));
                     let voted = timed(&mut st.vote, || vote::vote(sl, &field, paper, p.vote_sigma));

@@ -131,7 +131,9 @@ unsafe fn patch_error_avx2(
             // SAFETY (all unchecked accesses below): the padded coordinates are positive and
             // inside frame i's padded block by the validity rule; target arrays are padded by
             // ⌊n/2⌋ around every pixel; the CPU has AVX2 (checked by the caller).
-            let (x0, y0) = unsafe { ((sx + 0.5).to_int_unchecked::<i32>() as usize, (sy + 0.5).to_int_unchecked::<i32>() as usize) };
+            let (x0, y0) = unsafe {
+                ((sx + 0.5).to_int_unchecked::<i32>() as usize, (sy + 0.5).to_int_unchecked::<i32>() as usize)
+            };
             let idx = fbase + y0 * stride + x0;
             debug_assert!(idx < src.feat.len());
             let bytes = unsafe { _mm_loadl_epi64(feat.add(idx) as *const __m128i) };
@@ -214,7 +216,9 @@ fn kernel(
             // Nearest exemplar pixel of the tap; truncation is floor since padded coordinates
             // are positive by the validity rule (so no saturating conversion is needed).
             // SAFETY: sx, sy are finite and within the padded frame (validity rule).
-            let (x0, y0) = unsafe { ((sx + 0.5).to_int_unchecked::<i32>() as usize, (sy + 0.5).to_int_unchecked::<i32>() as usize) };
+            let (x0, y0) = unsafe {
+                ((sx + 0.5).to_int_unchecked::<i32>() as usize, (sy + 0.5).to_int_unchecked::<i32>() as usize)
+            };
             let idx = fbase + y0 * stride + x0;
             debug_assert!(idx < feat.len() && sx >= 0.0 && sy >= 0.0);
             // SAFETY: idx lies in frame i's padded block (validity rule above).
@@ -455,5 +459,62 @@ mod speed {
             );
         }
         println!("coherent: {:.1} ns [{sum}]", t.elapsed().as_nanos() as f64 / n as f64);
+    }
+}
+
+#[cfg(test)]
+mod terms {
+    use super::tests::synthetic;
+    use super::*;
+    use crate::synth::params::Params;
+    use crate::synth::source::SourcePyramid;
+
+    /// Every guide term of D is used: a candidate whose df / ext± / T^prev differ costs more,
+    /// and the difference scales with the term's weight (0 = no effect).
+    #[test]
+    fn every_term_counts_with_its_weight() {
+        let (rgb, g) = synthetic(40, 40, 15.0, 1);
+        let run = |params: Params, edit: &dyn Fn(&mut TargetLevel)| {
+            let pyr = SourcePyramid::build(&[rgb.clone(), rgb.clone()], &[g.clone(), g.clone()], &params, 5.0, 1);
+            let src = &pyr.levels[0];
+            let mut tgt = TargetLevel::new(&g, &pyr.quant, 5.0, None, [1.0; 3]);
+            for y in 0..40 {
+                for x in 0..40 {
+                    let k = tgt.pindex(x, y);
+                    tgt.cur[k][..3].copy_from_slice(&rgb.get(x, y).map(|v| (v * 255.0).round()));
+                    tgt.prev[k][..3].copy_from_slice(&rgb.get(x, y).map(|v| (v * 255.0).round()));
+                }
+            }
+            edit(&mut tgt);
+            let omega = vec![0.0; src.feat.len()];
+            let q = Query { tq: tgt.pindex(20, 20), w_col: 1.0, mw: params.w_prev };
+            patch_error(src, &omega, &tgt, q, 1, 20.0, 20.0, 1.0, 0.0, false, f32::INFINITY)
+        };
+        let shift_lane = |lane: usize, by: f32| {
+            move |t: &mut TargetLevel| {
+                for px in t.cur.iter_mut() {
+                    px[lane] += by;
+                }
+            }
+        };
+        let prev_off = |t: &mut TargetLevel| {
+            for px in t.prev.iter_mut() {
+                px[0] += 40.0;
+            }
+        };
+        let def = Params::builder().build().unwrap();
+        assert!(run(def.clone(), &|_| {}) < 1e-6);
+        for (name, lane, with, without) in [
+            ("df", 3, def.clone(), Params::builder().w_df(0.0).build().unwrap()),
+            ("ext+", 4, def.clone(), Params::builder().w_ext(0.0).build().unwrap()),
+            ("ext-", 5, def.clone(), Params::builder().w_ext(0.0).build().unwrap()),
+        ] {
+            let a = run(with, &shift_lane(lane, 30.0));
+            let b = run(without, &shift_lane(lane, 30.0));
+            assert!(a > 0.01 && b < 1e-6, "{name}: with the term {a}, without {b}");
+        }
+        let a = run(def, &prev_off);
+        let b = run(Params::builder().w_prev(0.0).build().unwrap(), &prev_off);
+        assert!(a > 0.01 && b < 1e-6, "T^prev: with {a}, without {b}");
     }
 }

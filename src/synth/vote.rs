@@ -23,7 +23,9 @@ pub(crate) fn vote_with(src: &SourceLevel, nnf: &Nnf, fill: Rgb, sigma: f32, cub
     // Offsets whose weight is below 2 % of the center's are skipped (with σ = 0.7 the 3 × 3
     // core: the outer ring would add under 2 % each and cost two thirds of the work).
     let taps: Vec<((isize, isize), f32)> = offsets()
-        .map(|(a, b)| ((a, b), if sigma > 0.0 { (-((a * a + b * b) as f32) / (2.0 * sigma * sigma)).exp() } else { 1.0 }))
+        .map(|(a, b)| {
+            ((a, b), if sigma > 0.0 { (-((a * a + b * b) as f32) / (2.0 * sigma * sigma)).exp() } else { 1.0 })
+        })
         .filter(|&(_, w)| w >= 0.02)
         .collect();
     let mut out = vec![fill; w * h];
