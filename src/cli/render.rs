@@ -16,6 +16,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Arguments of `render`.
 #[derive(clap::Args, Debug)]
+// `--target-scale` is `synth`'s; `render` has `--scale`.
+#[command(mut_arg("target_scale", |a| a.hide(true)))]
 pub struct Args {
     /// A Lottie .json file, a directory or glob of SVG frames, or a directory of PNG masks.
     pub input: PathBuf,
@@ -48,16 +50,17 @@ pub struct Args {
     /// Scale the canvas (0.5 = quick half-size preview; the paint texture scales along).
     #[arg(long, default_value_t = 1.0)]
     pub scale: f32,
-    /// Frames to render, 1-based inclusive (e.g. 1..24).
-    #[arg(long)]
+    /// Frames to render, 1-based inclusive: A..B, A.., ..B or N [default: all].
+    #[arg(long, value_name = "A..B")]
     pub frames: Option<String>,
     /// Worker threads [default: all cores]. The output does not depend on it.
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Also write every layer under OUT_DIR/layers/NN_name/.
+    /// Also write every layer alone (RGBA) under OUT_DIR/layers/NN_name/.
     #[arg(long)]
     pub keep_layers: bool,
-    /// Continue an interrupted render into the same OUT_DIR with the same options.
+    /// Continue an interrupted (Ctrl-C, killed) render into the same OUT_DIR; give the same
+    /// options as the interrupted run.
     #[arg(long)]
     pub resume: bool,
     /// Measure each stylized layer against its exemplar afterwards and print the numbers.
@@ -81,7 +84,10 @@ struct StylesFile {
     layers: toml::Table,
 }
 
-fn read_styles(path: &Path) -> Result<(Option<String>, Vec<(String, String)>)> {
+/// A styles file's default exemplar and per-layer `(LAYER, EXEMPLAR)` pairs.
+type Styles = (Option<String>, Vec<(String, String)>);
+
+fn read_styles(path: &Path) -> Result<Styles> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("could not read the styles file '{}'", path.display()))?;
     let file: StylesFile =
@@ -155,9 +161,24 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
         }
     }
     let frames = parse_frames(args.frames.as_deref(), anim.frames)?;
+    if let Some(end) =
+        args.frames.as_deref().and_then(|f| f.split_once("..")).and_then(|(_, b)| b.trim().parse::<usize>().ok())
+        && end > anim.frames
+    {
+        log::warn!(
+            "--frames '{}': the input has only {} frames; rendering {}..{}",
+            args.frames.as_deref().unwrap_or_default(),
+            anim.frames,
+            frames.start + 1,
+            frames.end
+        );
+    }
     let mut opts = RenderOptions::new(args.output.clone(), frames.clone());
     if let Some(path) = &args.styles {
         let (default, layers) = read_styles(path)?;
+        for (layer, _) in &layers {
+            anim.find_region(layer).with_context(|| format!("in the styles file '{}'", path.display()))?;
+        }
         opts.default_style = default;
         opts.styles = layers;
     }
@@ -181,7 +202,12 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     opts.resume = args.resume;
     opts.eval = args.eval;
 
-    let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::SeqCst));
+    // The first Ctrl-C stops after the frame in progress (resumable); a second one quits at once.
+    let _ = ctrlc::set_handler(|| {
+        if INTERRUPTED.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+    });
     let show = !ctx.quiet && std::io::stderr().is_terminal();
     let bars = Bars {
         multi: show.then(|| MultiProgress::with_draw_target(ProgressDrawTarget::stderr())),
@@ -220,6 +246,9 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
                 l.exemplar.as_deref().unwrap_or("(flat)"),
                 l.seconds
             );
+        }
+        if args.keep_layers {
+            eprintln!("layers -> {}", args.output.join("layers").display());
         }
     }
     for l in &summary.layers {
