@@ -642,3 +642,33 @@ fn frames_past_the_end_are_clipped_with_a_warning() {
     assert!(err.contains("warning:") && err.contains("only 8 frames"), "{err}");
     assert_eq!(tree(&out), frame_names(7..=8));
 }
+
+#[test]
+fn a_png_mask_sequence_is_painted_in_the_exemplar_colors() {
+    // White discs on black: no colors of their own, so by default the exemplar's colors.
+    let tmp = Scratch::new("masks");
+    let masks = tmp.join("masks");
+    std::fs::create_dir_all(&masks).unwrap();
+    for k in 0..3u32 {
+        let img = image::GrayImage::from_fn(100, 80, |x, y| {
+            let (dx, dy) = (x as f64 - 40.0 - 3.0 * k as f64, y as f64 - 40.0);
+            image::Luma([if dx * dx + dy * dy < 25.0 * 25.0 { 255 } else { 0 }])
+        });
+        img.save(masks.join(format!("m{k}.png"))).unwrap();
+    }
+    let out = tmp.join("out");
+    let o = render(&masks, &out, &[]);
+    assert_success(&o);
+    let mut mean = HueMean::default();
+    for f in frame_names(1..=3) {
+        let img = rgba(&out.join(f));
+        assert_eq!(img.dimensions(), (100, 80));
+        for (x, y, _) in img.enumerate_pixels() {
+            mean.add(px(&img, x, y), [1.0; 3]);
+        }
+    }
+    // A disc of radius 25 covers ~1960 pixels per frame; white glazed on white showed none.
+    assert!(mean.n > 3 * 1000, "only {} painted pixels", mean.n);
+    let pigment = pigment_hue("blue-bloom");
+    assert!(hue_distance(mean.mean(), pigment) < HUE_TOLERANCE, "{:.1}° vs {pigment:.1}°", mean.mean());
+}

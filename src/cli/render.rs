@@ -41,9 +41,10 @@ pub struct Args {
     /// [default: the animation's own background, else white].
     #[arg(long, value_name = "COLOR|none|IMAGE")]
     pub background: Option<String>,
-    /// How stylized layers take their colors.
-    #[arg(long, value_enum, default_value_t = Recolor::Glaze)]
-    pub recolor: Recolor,
+    /// How stylized layers take their colors [default: glaze; none for a PNG mask sequence,
+    /// which has no colors of its own].
+    #[arg(long, value_enum)]
+    pub recolor: Option<Recolor>,
     /// What happens to strokes.
     #[arg(long, value_enum, default_value_t = StrokeMode::Keep)]
     pub strokes: StrokeMode,
@@ -194,7 +195,30 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     opts.gif = args.gif.clone();
     opts.exemplar_dirs = args.exemplar_dir.clone();
     opts.background = args.background.clone();
-    opts.recolor = args.recolor;
+    // Mask sequences are white on nothing: glazed in their own color they would not show.
+    let masks_only = anim.regions.iter().all(|r| r.kind == anim::RegionKind::MaskSequence);
+    opts.recolor = args.recolor.unwrap_or(if masks_only { Recolor::None } else { Recolor::Glaze });
+    if opts.recolor == Recolor::Glaze {
+        let paper = match args.background.as_deref() {
+            None => Some(anim.background.as_ref().map(|b| b.color).unwrap_or([1.0; 4])),
+            Some(spec) => fluidymation::composite::parse_color(spec),
+        };
+        for (i, r) in anim.regions.iter().enumerate() {
+            // The last --style naming the layer wins, else the default.
+            let style = opts.styles.iter().rev().find(|(k, _)| anim.find_region(k).ok() == Some(i)).map(|(_, e)| e);
+            let flat = style.or(opts.default_style.as_ref()).is_some_and(|e| e == render::NO_STYLE);
+            if let Some(p) = paper
+                && !flat
+                && (0..3).all(|i| (r.color[i] - p[i]).abs() < 0.02)
+            {
+                log::warn!(
+                    "layer '{}' has the background's color: a glaze of it does not show; \
+                     try --recolor none (the exemplar's colors) or another --background",
+                    r.name
+                );
+            }
+        }
+    }
     opts.strokes = args.strokes;
     opts.params = params;
     opts.scale = args.scale;
