@@ -169,11 +169,11 @@ fn px(img: &image::RgbaImage, x: u32, y: u32) -> [f64; 3] {
 
 /// Hue tolerance of a stylized layer against its target color, in degrees. Measured
 /// (seed 1): demo layers within 4.2° of their fill (arm 4.2, head 1.8, scarf 0.1, dress 2.2,
-/// legs 0.5), quads within 3.6°, exemplar colors under `--recolor none` within 2°. The glaze
-/// raises the tint to the pigment amount (`T = F^a`, Beer–Lambert), which shifts the sRGB hue
-/// a little where the paint is lighter or darker than typical; twice the largest error
-/// measured still tells apart every pair of colors compared here (the closest, rose-burst's
-/// pigment and the red fill, are 29° apart).
+/// legs 0.5); quads within 2.3° (red 0.1, green 0.5, blue 2.3); under `--recolor none`
+/// within 0.6° of the exemplar's own paint. The glaze raises the tint to the pigment amount
+/// (`T = F^a`, Beer–Lambert), which shifts the sRGB hue a little where the paint is lighter
+/// or darker than typical. Twice the largest error measured still tells apart every pair of
+/// colors compared here (the closest, rose-burst's paint and the red fill, are 35° apart).
 const HUE_TOLERANCE: f64 = 8.0;
 
 #[test]
@@ -282,7 +282,8 @@ fn check_gif(gif: &Path, frames_dir: &Path, frames: usize, fps: f64, size: (u32,
             .map(|(a, b)| (0..3).map(|i| (a[i] as i64 - b[i] as i64).unsigned_abs()).sum::<u64>())
             .sum();
         let mean = diff as f64 / (w * h * 3) as f64;
-        assert!(mean < 3.0, "GIF frame at {t} cs differs from {} by {mean:.2} levels", pngs[k].display());
+        // Measured 0.13–0.15 levels on average (palette and dithering).
+        assert!(mean < 1.0, "GIF frame at {t} cs differs from {} by {mean:.2} levels", pngs[k].display());
         t += frame.delay as u64;
         shown += 1;
     }
@@ -295,8 +296,8 @@ fn check_gif(gif: &Path, frames_dir: &Path, frames: usize, fps: f64, size: (u32,
 const QUADS: [(&str, &str, u32, u32); 4] =
     [("red", "#d92633", 0, 0), ("green", "#2e9e4a", 70, 0), ("blue", "#3366d9", 0, 70), ("orange", "#f08c1e", 70, 70)];
 
-/// Mean hue and luminance standard deviation (0..255) of the painted pixels of a quadrant
-/// over frames 1..=4 on white.
+/// Mean hue and number of the painted pixels of a quadrant over frames 1..=4 on white, and
+/// the standard deviation (0..255) of the luminance in a 24×24 block inside its square.
 fn quadrant_stats(out: &Path, x0: u32, y0: u32) -> (f64, f64, usize) {
     let mut mean = HueMean::default();
     let mut luma = Vec::new();
@@ -307,21 +308,35 @@ fn quadrant_stats(out: &Path, x0: u32, y0: u32) -> (f64, f64, usize) {
             for x in x0..x0 + 70 {
                 let c = px(&img, x, y);
                 mean.add(c, [1.0; 3]);
-                if (0..3).any(|i| c[i] < 0.9) {
+                if (x0 + 22..x0 + 46).contains(&x) && (y0 + 22..y0 + 46).contains(&y) {
                     luma.push(255.0 * (0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]));
                 }
             }
         }
     }
-    let m = luma.iter().sum::<f64>() / luma.len().max(1) as f64;
-    let sd = (luma.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / luma.len().max(1) as f64).sqrt();
+    let m = luma.iter().sum::<f64>() / luma.len() as f64;
+    let sd = (luma.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / luma.len() as f64).sqrt();
     (mean.mean(), sd, mean.n)
 }
 
-fn pigment_hue(exemplar: &str) -> f64 {
+/// Mean hue of an exemplar's own paint, measured like the renders: its painted pixels
+/// (mask ≥ ½) with the paper normalized to white (`I / P` in linear light, as `--recolor
+/// none` glazes them). The exemplars' nominal `pigment` colors differ from this by up to 7°
+/// (rose-burst: #b71c71 is 327°, its paint 320°).
+fn exemplar_hue(exemplar: &str) -> f64 {
     let search = fluidymation::exemplar::SearchPath::standard(&[]);
     let ex = fluidymation::exemplar::find(exemplar, &search).unwrap();
-    hue(hex(&ex.meta.pigment)).0
+    let paper = ex.paper().map(|v| to_linear(v as f64));
+    let mut mean = HueMean::default();
+    for (frame, mask) in ex.frames.iter().zip(&ex.masks) {
+        for (c, &m) in frame.data().iter().zip(mask.data()) {
+            if m >= 0.5 {
+                mean.add([0, 1, 2].map(|i| to_srgb(to_linear(c[i] as f64) / paper[i])), [1.0; 3]);
+            }
+        }
+    }
+    assert!(mean.n > 1000, "{exemplar}: {} painted pixels", mean.n);
+    mean.mean()
 }
 
 #[test]
@@ -349,7 +364,7 @@ fn glaze_takes_each_layer_fill_hue_with_any_exemplar() {
         assert!(n > 4 * 500, "{name}: {n} painted pixels");
         let error = hue_distance(mean, hue(hex(fill)).0);
         assert!(error < HUE_TOLERANCE, "{name}: mean hue {mean:.1}° vs fill {fill} (error {error:.1}°)");
-        // Stylized, not flat: the paint varies (measured 9–21 levels; a flat fill has 0).
+        // Stylized, not flat: the paint varies inside (measured 12.5–19.3 levels; flat: 0).
         assert!(sd > 4.0, "{name}: luminance sd {sd:.1}");
     }
     // The layer left flat keeps its exact color inside (it moves from (105, 105) to (103, 103)).
@@ -381,9 +396,9 @@ fn recolor_none_keeps_the_exemplar_colors() {
         let exemplar = if name == "red" { "rose-burst" } else { "blue-bloom" };
         let (mean, _, n) = quadrant_stats(&out, x0, y0);
         assert!(n > 4 * 500, "{name}: {n} painted pixels");
-        let pigment = pigment_hue(exemplar);
-        let error = hue_distance(mean, pigment);
-        assert!(error < HUE_TOLERANCE, "{name}: mean hue {mean:.1}° vs {exemplar}'s pigment {pigment:.1}°");
+        let paint = exemplar_hue(exemplar);
+        let error = hue_distance(mean, paint);
+        assert!(error < HUE_TOLERANCE, "{name}: mean hue {mean:.1}° vs {exemplar}'s paint {paint:.1}°");
         // …and not the layer's own color.
         assert!(hue_distance(mean, hue(hex(fill)).0) > 20.0, "{name}: {mean:.1}° is its fill {fill}");
     }
@@ -405,7 +420,7 @@ fn same_seed_same_bytes_on_any_thread_count() {
     let (a, b, c) = (png_bytes(&tmp.join("a")), png_bytes(&tmp.join("b")), png_bytes(&tmp.join("c")));
     assert_eq!(a.keys().cloned().collect::<Vec<_>>(), frame_names(1..=3));
     assert!(a == b, "--threads 1 and --threads 2 give different bytes with the same seed");
-    // Another seed: other paint (measured: ~12 % of the pixels of frame 3 change).
+    // Another seed: other paint (measured: ~5000 of the 40 000 pixels differ).
     let (x, y) = (rgba(&tmp.join("a/0003.png")), rgba(&tmp.join("c/0003.png")));
     let changed = x.pixels().zip(y.pixels()).filter(|(p, q)| p != q).count();
     assert!(changed > 1000, "only {changed} pixels differ between seeds 7 and 8");
@@ -669,6 +684,6 @@ fn a_png_mask_sequence_is_painted_in_the_exemplar_colors() {
     }
     // A disc of radius 25 covers ~1960 pixels per frame; white glazed on white showed none.
     assert!(mean.n > 3 * 1000, "only {} painted pixels", mean.n);
-    let pigment = pigment_hue("blue-bloom");
-    assert!(hue_distance(mean.mean(), pigment) < HUE_TOLERANCE, "{:.1}° vs {pigment:.1}°", mean.mean());
+    let paint = exemplar_hue("blue-bloom");
+    assert!(hue_distance(mean.mean(), paint) < HUE_TOLERANCE, "{:.1}° vs {paint:.1}°", mean.mean());
 }
