@@ -291,12 +291,14 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
         }
     }
     // Temporary files of a run that was killed while writing.
-    output::remove_stale_temporaries(&opts.out_dir);
+    output::remove_stale_temporaries(&opts.out_dir, None);
     for d in layer_dirs.iter().filter(|d| d.is_dir()) {
-        output::remove_stale_temporaries(d);
+        output::remove_stale_temporaries(d, None);
     }
     if let Some(gif) = &opts.gif {
-        output::remove_stale_temporaries(gif.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new(".")));
+        // The GIF may be written anywhere: only its own temporary files.
+        let dir = gif.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        output::remove_stale_temporaries(dir, gif.file_name().and_then(|n| n.to_str()));
     }
     if !opts.resume && state_dir.exists() {
         std::fs::remove_dir_all(&state_dir).map_err(|e| Error::io(&state_dir, e))?;

@@ -93,9 +93,10 @@ pub fn prepare_dir(dir: &Path) -> Result<()> {
 }
 
 /// Removes the temporary files that an atomic write of a killed process left in `dir`
-/// (`.NAME.PID.tmp` for PNG, GIF and resume-state files, see [`img::atomic_write`]), except
-/// those of processes still running. Returns how many were removed; errors are ignored.
-pub fn remove_stale_temporaries(dir: &Path) -> usize {
+/// (`.NAME.PID.tmp` for PNG, GIF and resume-state files, see [`img::atomic_write`]; only
+/// those of the file `only` when given), except those of processes still running. Returns
+/// how many were removed; errors are ignored.
+pub fn remove_stale_temporaries(dir: &Path, only: Option<&str>) -> usize {
     let Ok(entries) = std::fs::read_dir(dir) else { return 0 };
     let own = std::process::id().to_string();
     let proc_fs = Path::new("/proc/self").exists();
@@ -105,7 +106,10 @@ pub fn remove_stale_temporaries(dir: &Path) -> usize {
         let Some(name) = name.to_str() else { continue };
         let Some(inner) = name.strip_prefix('.').and_then(|n| n.strip_suffix(".tmp")) else { continue };
         let Some((target, pid)) = inner.rsplit_once('.') else { continue };
-        let ours = [".png", ".gif", ".state", ".toml"].iter().any(|ext| target.ends_with(ext));
+        let ours = match only {
+            Some(file) => target == file,
+            None => [".png", ".gif", ".state", ".toml"].iter().any(|ext| target.ends_with(ext)),
+        };
         if !ours || pid.is_empty() || !pid.bytes().all(|b| b.is_ascii_digit()) || pid == own {
             continue;
         }
@@ -152,7 +156,8 @@ mod tests {
         for n in &names {
             std::fs::write(dir.join(n), b"x").unwrap();
         }
-        assert_eq!(remove_stale_temporaries(&dir), 2);
+        assert_eq!(remove_stale_temporaries(&dir, Some("other.gif")), 0);
+        assert_eq!(remove_stale_temporaries(&dir, None), 2);
         let mut left: Vec<String> =
             std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
         left.sort();
