@@ -115,6 +115,21 @@ struct Bars {
     interrupted: &'static AtomicBool,
 }
 
+impl Bars {
+    /// Removes every bar from the terminal. Bars that are only dropped draw themselves once
+    /// more (indicatif's default), which left a stale bar above the summary or the error.
+    fn clear(&self) {
+        if let Ok(bars) = self.bars.lock() {
+            for bar in bars.values() {
+                bar.finish_and_clear();
+            }
+        }
+        if let Some(m) = &self.multi {
+            let _ = m.clear();
+        }
+    }
+}
+
 impl Progress for Bars {
     fn update(&self, stage: &str, done: usize, total: usize) -> bool {
         if let Some(multi) = &self.multi
@@ -239,9 +254,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
         interrupted: &INTERRUPTED,
     };
     let result = render::render(&anim, &opts, &bars);
-    if let Some(m) = &bars.multi {
-        let _ = m.clear();
-    }
+    bars.clear();
     let summary = match result {
         Ok(s) => s,
         Err(Error::Cancelled) => {
