@@ -22,7 +22,7 @@ pub struct Args {
     /// A Lottie .json file, a directory or glob of SVG frames, or a directory of PNG masks.
     pub input: PathBuf,
     /// Output directory for the frames (NNNN.png, 0001 = the first frame).
-    #[arg(long, short = 'o')]
+    #[arg(long, short = 'o', value_name = "OUT_DIR")]
     pub output: PathBuf,
     /// Also write an animated GIF.
     #[arg(long, value_name = "FILE")]
@@ -55,7 +55,7 @@ pub struct Args {
     #[arg(long, value_name = "A..B")]
     pub frames: Option<String>,
     /// Worker threads [default: all cores]. The output does not depend on it.
-    #[arg(long)]
+    #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
     /// Also write every layer alone (RGBA) under OUT_DIR/layers/NN_name/.
     #[arg(long)]
@@ -73,7 +73,7 @@ pub struct Args {
     /// Extra directories to look for exemplars by name.
     #[arg(long, value_name = "DIR")]
     pub exemplar_dir: Vec<PathBuf>,
-    #[command(flatten)]
+    #[command(flatten, next_help_heading = "Synthesis (seed and engine parameters)")]
     pub flags: SynthFlags,
 }
 
