@@ -458,12 +458,14 @@ fn interrupt(child: &Child) {
     assert!(status.success());
 }
 
+#[cfg(unix)]
 #[test]
 fn interrupted_renders_resume_to_the_same_bytes() {
     let tmp = Scratch::new("resume");
     let args = ["--frames", "1..10", "--scale", "0.5", "--keep-layers"];
     let full = tmp.join("full");
-    assert_success(&render(&demo(), &full, &args));
+    let gif = full.join("demo.gif");
+    assert_success(&render(&demo(), &full, &[&args[..], &["--gif", gif.to_str().unwrap()]].concat()));
     assert!(!full.join(".fluidymation").exists(), "the resume state is removed after success");
 
     let out = tmp.join("out");
@@ -478,6 +480,7 @@ fn interrupted_renders_resume_to_the_same_bytes() {
     assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
     let err = stderr(&o);
     assert!(err.contains("interrupted") && err.contains("--resume") && err.contains(out.to_str().unwrap()), "{err}");
+    assert!(!out.join("0001.png").exists(), "the interrupt came before the first frame");
 
     // Killed (SIGKILL) in the middle of the resumed render.
     let mut child = spawn(&demo(), &out, &resume);
@@ -503,12 +506,15 @@ fn interrupted_renders_resume_to_the_same_bytes() {
     let o = child.wait_with_output().unwrap();
     assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
 
-    // The last resume finishes; everything equals the uninterrupted render, byte for byte.
-    let o = render(&demo(), &out, &resume);
+    // The last resume finishes (and writes the GIF, which needs all frames); everything
+    // equals the uninterrupted render, byte for byte.
+    let gif = out.join("demo.gif");
+    let o = render(&demo(), &out, &[&resume[..], &["--gif", gif.to_str().unwrap()]].concat());
     assert_success(&o);
     assert!(stderr(&o).contains("resumed"), "{}", stderr(&o));
     assert_eq!(tree(&out), tree(&full), "same files, no temporary or state files left");
     assert!(png_bytes(&out) == png_bytes(&full), "resumed frames differ from the uninterrupted render");
+    assert!(std::fs::read(&gif).unwrap() == std::fs::read(full.join("demo.gif")).unwrap(), "the GIFs differ");
     for layer in tree(&full.join("layers")).iter().filter(|n| !n.contains('/')) {
         let (a, b) = (png_bytes(&out.join("layers").join(layer)), png_bytes(&full.join("layers").join(layer)));
         assert!(a == b, "layer {layer} differs after resuming");
