@@ -198,7 +198,14 @@ fn style_params(base: &Params, ex: &Exemplar, scale: f32) -> Result<Params> {
     if let Some(bw) = base.border_width() {
         b = b.border_width(bw * scale);
     }
-    b.build()
+    b.build().map_err(|e| match e {
+        Error::InvalidParam { name, value, allowed } => Error::param(
+            "scale",
+            scale,
+            format!("a larger scale: the exemplar's {name} scaled along would be {value}, but it must be {allowed}"),
+        ),
+        other => other,
+    })
 }
 
 /// Renders `anim` as `opts` says; see the [module documentation](self).
@@ -214,8 +221,8 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
     if range.is_empty() {
         return Err(Error::param(
             "frames",
-            format!("{:?}", opts.frames),
-            format!("a range inside 1..={}", anim.frames),
+            format!("{}..{}", opts.frames.start + 1, opts.frames.end),
+            format!("a range inside 1..{} (1-based, inclusive)", anim.frames),
         ));
     }
     let (w, h) = (anim.width as usize, anim.height as usize);
@@ -231,12 +238,6 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
     names.sort();
     names.dedup();
     let exemplars: Vec<Exemplar> = names.iter().map(|n| exemplar::find(n, &search)).collect::<Result<_>>()?;
-    output::prepare_dir(&opts.out_dir)?;
-    if let Some(gif) = &opts.gif
-        && let Some(dir) = gif.parent().filter(|d| !d.as_os_str().is_empty())
-    {
-        output::prepare_dir(dir)?;
-    }
     let styles: Vec<Style> = names
         .iter()
         .zip(exemplars)
@@ -249,16 +250,76 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
         .collect::<Result<_>>()?;
     let style_index = |n: &Option<String>| n.as_ref().and_then(|n| names.iter().position(|m| m == n));
 
-    // Per-layer synthesizers and guide streams (the guides' backward pass runs here).
+    // Resume: check that there is something to continue, made with the same options, before
+    // anything is created or computed.
     let n = range.len();
+    let state_dir = opts.out_dir.join(STATE_DIR);
+    let input = std::fs::canonicalize(&anim.path).unwrap_or_else(|_| anim.path.clone());
+    let fingerprint = fnv(&format!(
+        "{}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{}|{}|{:?}|{}",
+        input.display(),
+        range,
+        styles_of,
+        opts.recolor,
+        opts.strokes,
+        opts.background,
+        opts.params,
+        opts.scale,
+        w * 100_000 + h,
+        styles.iter().map(|s| s.source.frames()).collect::<Vec<_>>(),
+        opts.keep_layers,
+    ));
+    let done = if opts.resume { read_progress(&opts.out_dir, fingerprint)?.min(n) } else { 0 };
+
+    // Output locations, checked before the work starts.
+    if let Some(gif) = &opts.gif {
+        if gif.is_dir() {
+            return Err(Error::io(
+                gif,
+                std::io::Error::new(std::io::ErrorKind::IsADirectory, "is a directory; --gif needs a file name"),
+            ));
+        }
+        if let Some(dir) = gif.parent().filter(|d| !d.as_os_str().is_empty()) {
+            output::prepare_dir(dir)?;
+        }
+    }
+    output::prepare_dir(&opts.out_dir)?;
+    let layer_dirs: Vec<PathBuf> = anim.regions.iter().map(|r| output::layer_dir(&opts.out_dir, r)).collect();
+    if opts.keep_layers {
+        for d in &layer_dirs {
+            output::prepare_dir(d)?;
+        }
+    }
+    // Temporary files of a run that was killed while writing.
+    output::remove_stale_temporaries(&opts.out_dir, None);
+    for d in layer_dirs.iter().filter(|d| d.is_dir()) {
+        output::remove_stale_temporaries(d, None);
+    }
+    if let Some(gif) = &opts.gif {
+        // The GIF may be written anywhere: only its own temporary files.
+        let dir = gif.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        output::remove_stale_temporaries(dir, gif.file_name().and_then(|n| n.to_str()));
+    }
+    if !opts.resume && state_dir.exists() {
+        std::fs::remove_dir_all(&state_dir).map_err(|e| Error::io(&state_dir, e))?;
+    }
+    if done < n {
+        std::fs::create_dir_all(&state_dir).map_err(|e| Error::io(&state_dir, e))?;
+        if done == 0 {
+            // Resumable from the start: an interruption before the first frame resumes too.
+            write_progress(&state_dir, fingerprint, 0)?;
+        }
+    }
+
+    // Per-layer synthesizers and guide streams (the guides' backward pass runs here).
     let total_stage = "frames";
     let mut layers: Vec<Layer> = (0..anim.regions.len())
         .into_par_iter()
         .map(|region| -> Result<Layer> {
             let style = style_index(&styles_of[region]);
             let (synth, guides) = match style {
-                None => (None, None),
-                Some(s) => {
+                // Nothing left to synthesize when every frame was done (only the GIF was missing).
+                Some(s) if done < n => {
                     let st = &styles[s];
                     let first = range.start;
                     let strokes = opts.strokes;
@@ -269,29 +330,15 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
                     )?;
                     (Some(Synthesizer::new(st.source.clone(), st.params.clone())?), Some(stream))
                 }
+                _ => (None, None),
             };
             Ok(Layer { region, style, synth, guides, seconds: 0.0, kept: Vec::new() })
         })
         .collect::<Result<_>>()?;
 
-    // Resume.
-    let state_dir = opts.out_dir.join(STATE_DIR);
-    let fingerprint = fnv(&format!(
-        "{}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{}|{}|{:?}",
-        anim.path.display(),
-        range,
-        styles_of,
-        opts.recolor,
-        opts.strokes,
-        opts.background,
-        opts.params,
-        opts.scale,
-        w * 100_000 + h,
-        styles.iter().map(|s| s.source.frames()).collect::<Vec<_>>()
-    ));
-    let mut done = 0usize;
-    if opts.resume {
-        done = restore(&state_dir, fingerprint, &mut layers, anim)?;
+    let stages: Vec<String> = anim.regions.iter().map(|r| format!("{:02} {}", r.index, r.name)).collect();
+    if done > 0 {
+        restore(&state_dir, done, &mut layers, &stages)?;
         for l in layers.iter_mut() {
             if let Some(g) = l.guides.as_mut() {
                 for _ in 0..done {
@@ -299,20 +346,7 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
                 }
             }
         }
-    } else if state_dir.exists() {
-        let _ = std::fs::remove_dir_all(&state_dir);
     }
-    if done < n {
-        std::fs::create_dir_all(&state_dir).map_err(|e| Error::io(&state_dir, e))?;
-    }
-
-    let layer_dirs: Vec<PathBuf> = anim.regions.iter().map(|r| output::layer_dir(&opts.out_dir, r)).collect();
-    if opts.keep_layers {
-        for d in &layer_dirs {
-            output::prepare_dir(d)?;
-        }
-    }
-    let stages: Vec<String> = anim.regions.iter().map(|r| format!("{:02} {}", r.index, r.name)).collect();
     for (l, s) in layers.iter().zip(&stages) {
         if l.synth.is_some() && !progress.update(s, done, n) {
             return Err(Error::Cancelled);
@@ -326,7 +360,8 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
         let frame = range.start + k;
         let results: Vec<(Option<StylizedLayer>, RegionFrame)> = layers
             .par_iter_mut()
-            .map(|l| -> Result<(Option<StylizedLayer>, RegionFrame)> {
+            .zip(&stages)
+            .map(|(l, stage)| -> Result<(Option<StylizedLayer>, RegionFrame)> {
                 let rf = anim.render(l.region, frame)?;
                 let (Some(synth), Some(guides), Some(s)) = (l.synth.as_mut(), l.guides.as_mut(), l.style) else {
                     return Ok((None, rf));
@@ -340,6 +375,11 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
                 let flat = target_fill(&rf, opts.strokes);
                 let layer = composite::recolor_with(&out.rgb, &out.mask, &flat, &styles[s].pigment, opts.recolor)?;
                 l.seconds += t0.elapsed().as_secs_f64();
+                // This layer's bar moves as soon as its frame is done; the frame is only
+                // written (and the state saved) once every layer has it.
+                if !progress.update(stage, k + 1, n) {
+                    return Err(Error::Cancelled);
+                }
                 if opts.eval {
                     let rgba: Vec<u8> = out
                         .rgb
@@ -379,11 +419,6 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
         output::write_frame(&opts.out_dir, frame, anim.frames, &image)?;
         save_state(&state_dir, fingerprint, k + 1, &layers, &stages)?;
         written += 1;
-        for (l, s) in layers.iter().zip(&stages) {
-            if l.synth.is_some() && !progress.update(s, k + 1, n) {
-                return Err(Error::Cancelled);
-            }
-        }
         if !progress.update(total_stage, k + 1, n) {
             return Err(Error::Cancelled);
         }
@@ -459,27 +494,53 @@ fn evaluate_layer(l: &Layer, style: &Style, w: usize, h: usize) -> Result<eval::
     eval::evaluate(&frames, &style.exemplar, &masks, &options)
 }
 
-fn state_file(dir: &Path, stage: &str) -> PathBuf {
-    dir.join(format!("{}.state", crate::anim::slug(stage)))
+/// The state of layer `stage` after `done` frames. Every frame has its own files, so that the
+/// progress file (the commit point) never refers to states that a later, interrupted save
+/// has already overwritten.
+fn state_file(dir: &Path, stage: &str, done: usize) -> PathBuf {
+    dir.join(format!("{}.{}.state", crate::anim::slug(stage), done))
 }
 
-/// Writes the per-layer states and then the progress file (the commit point).
+fn progress_file(dir: &Path) -> PathBuf {
+    dir.join("progress.toml")
+}
+
+fn write_progress(dir: &Path, fingerprint: u64, done: usize) -> Result<()> {
+    let text = format!("fingerprint = {}\ndone = {}\n", fingerprint, done);
+    img::atomic_write(&progress_file(dir), |w| w.write_all(text.as_bytes()))
+}
+
+/// Writes the per-layer states after `done` frames, then the progress file (the commit
+/// point), then removes the states of the frame before.
 fn save_state(dir: &Path, fingerprint: u64, done: usize, layers: &[Layer], stages: &[String]) -> Result<()> {
     for (l, stage) in layers.iter().zip(stages) {
         if let Some(s) = &l.synth {
             let bytes = s.save_state();
-            img::atomic_write(&state_file(dir, stage), |w| w.write_all(&bytes))?;
+            img::atomic_write(&state_file(dir, stage, done), |w| w.write_all(&bytes))?;
         }
     }
-    let text = format!("fingerprint = {}\ndone = {}\n", fingerprint, done);
-    img::atomic_write(&dir.join("progress.toml"), |w| w.write_all(text.as_bytes()))
+    write_progress(dir, fingerprint, done)?;
+    if done > 0 {
+        for (l, stage) in layers.iter().zip(stages) {
+            if l.synth.is_some() {
+                let _ = std::fs::remove_file(state_file(dir, stage, done - 1));
+            }
+        }
+    }
+    Ok(())
 }
 
-/// Restores the states written by [`save_state`]; returns how many frames were done.
-fn restore(dir: &Path, fingerprint: u64, layers: &mut [Layer], anim: &Animation) -> Result<usize> {
-    let path = dir.join("progress.toml");
-    let text = std::fs::read_to_string(&path).map_err(|e| {
-        Error::io(&path, std::io::Error::new(e.kind(), format!("nothing to resume ({}); render without --resume", e)))
+/// Reads the progress of an interrupted render in `out_dir`: how many frames were done.
+/// Fails when there is none, or when it was made with other options (`fingerprint`).
+fn read_progress(out_dir: &Path, fingerprint: u64) -> Result<usize> {
+    let path = progress_file(&out_dir.join(STATE_DIR));
+    let text = std::fs::read_to_string(&path).map_err(|e| Error::Empty {
+        path: out_dir.to_path_buf(),
+        what: format!(
+            "there is no interrupted render to resume here ({}: {}); render without --resume",
+            path.display(),
+            e
+        ),
     })?;
     let fields: BTreeMap<&str, &str> =
         text.lines().filter_map(|l| l.split_once('=')).map(|(k, v)| (k.trim(), v.trim())).collect();
@@ -488,14 +549,18 @@ fn restore(dir: &Path, fingerprint: u64, layers: &mut [Layer], anim: &Animation)
     let done: usize = fields.get("done").and_then(|v| v.parse().ok()).ok_or_else(|| corrupt("no frame count"))?;
     if fp != fingerprint {
         return Err(corrupt(
-            "the interrupted render used another input, frame range, style or parameters; \
+            "the interrupted render used another input, frame range, style, --keep-layers or parameters; \
              resume with the same options, or render without --resume",
         ));
     }
-    for l in layers.iter_mut() {
+    Ok(done)
+}
+
+/// Restores the states written by [`save_state`] after `done` frames.
+fn restore(dir: &Path, done: usize, layers: &mut [Layer], stages: &[String]) -> Result<()> {
+    for (l, stage) in layers.iter_mut().zip(stages) {
         if let Some(s) = l.synth.as_mut() {
-            let r = &anim.regions[l.region];
-            let file = state_file(dir, &format!("{:02} {}", r.index, r.name));
+            let file = state_file(dir, stage, done);
             let bytes = std::fs::read(&file).map_err(|e| Error::io(&file, e))?;
             s.load_state(&bytes, &file)?;
             if s.frame() != done {
@@ -506,5 +571,5 @@ fn restore(dir: &Path, fingerprint: u64, layers: &mut [Layer], anim: &Animation)
             }
         }
     }
-    Ok(done)
+    Ok(())
 }

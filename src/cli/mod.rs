@@ -61,8 +61,15 @@ pub fn init_logging(quiet: bool, verbose: u8) {
 pub fn report_error(err: &anyhow::Error) -> ExitCode {
     let mut stderr = std::io::stderr();
     let _ = writeln!(stderr, "error: {}", err);
+    // Some errors print their source as part of their own message ("'out': Not a directory"):
+    // skip a cause that the line before already said.
+    let mut said = err.to_string();
     for cause in err.chain().skip(1) {
-        let _ = writeln!(stderr, "  caused by: {}", cause);
+        let text = cause.to_string();
+        if !said.ends_with(&text) {
+            let _ = writeln!(stderr, "  caused by: {}", text);
+        }
+        said = text;
     }
     let cancelled =
         err.chain().any(|c| matches!(c.downcast_ref::<fluidymation::Error>(), Some(fluidymation::Error::Cancelled)));

@@ -16,11 +16,13 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Arguments of `render`.
 #[derive(clap::Args, Debug)]
+// `--target-scale` is `synth`'s; `render` has `--scale`.
+#[command(mut_arg("target_scale", |a| a.hide(true)))]
 pub struct Args {
     /// A Lottie .json file, a directory or glob of SVG frames, or a directory of PNG masks.
     pub input: PathBuf,
     /// Output directory for the frames (NNNN.png, 0001 = the first frame).
-    #[arg(long, short = 'o')]
+    #[arg(long, short = 'o', value_name = "OUT_DIR")]
     pub output: PathBuf,
     /// Also write an animated GIF.
     #[arg(long, value_name = "FILE")]
@@ -39,25 +41,27 @@ pub struct Args {
     /// [default: the animation's own background, else white].
     #[arg(long, value_name = "COLOR|none|IMAGE")]
     pub background: Option<String>,
-    /// How stylized layers take their colors.
-    #[arg(long, value_enum, default_value_t = Recolor::Glaze)]
-    pub recolor: Recolor,
+    /// How stylized layers take their colors [default: glaze; none for a PNG mask sequence,
+    /// which has no colors of its own].
+    #[arg(long, value_enum)]
+    pub recolor: Option<Recolor>,
     /// What happens to strokes.
     #[arg(long, value_enum, default_value_t = StrokeMode::Keep)]
     pub strokes: StrokeMode,
     /// Scale the canvas (0.5 = quick half-size preview; the paint texture scales along).
     #[arg(long, default_value_t = 1.0)]
     pub scale: f32,
-    /// Frames to render, 1-based inclusive (e.g. 1..24).
-    #[arg(long)]
+    /// Frames to render, 1-based inclusive: A..B, A.., ..B or N [default: all].
+    #[arg(long, value_name = "A..B")]
     pub frames: Option<String>,
     /// Worker threads [default: all cores]. The output does not depend on it.
-    #[arg(long)]
+    #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
-    /// Also write every layer under OUT_DIR/layers/NN_name/.
+    /// Also write every layer alone (RGBA) under OUT_DIR/layers/NN_name/.
     #[arg(long)]
     pub keep_layers: bool,
-    /// Continue an interrupted render into the same OUT_DIR with the same options.
+    /// Continue an interrupted (Ctrl-C, killed) render into the same OUT_DIR; give the same
+    /// options as the interrupted run.
     #[arg(long)]
     pub resume: bool,
     /// Measure each stylized layer against its exemplar afterwards and print the numbers.
@@ -69,7 +73,7 @@ pub struct Args {
     /// Extra directories to look for exemplars by name.
     #[arg(long, value_name = "DIR")]
     pub exemplar_dir: Vec<PathBuf>,
-    #[command(flatten)]
+    #[command(flatten, next_help_heading = "Synthesis (seed and engine parameters)")]
     pub flags: SynthFlags,
 }
 
@@ -81,7 +85,10 @@ struct StylesFile {
     layers: toml::Table,
 }
 
-fn read_styles(path: &Path) -> Result<(Option<String>, Vec<(String, String)>)> {
+/// A styles file's default exemplar and per-layer `(LAYER, EXEMPLAR)` pairs.
+type Styles = (Option<String>, Vec<(String, String)>);
+
+fn read_styles(path: &Path) -> Result<Styles> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("could not read the styles file '{}'", path.display()))?;
     let file: StylesFile =
@@ -106,6 +113,21 @@ struct Bars {
     multi: Option<MultiProgress>,
     bars: Mutex<HashMap<String, ProgressBar>>,
     interrupted: &'static AtomicBool,
+}
+
+impl Bars {
+    /// Removes every bar from the terminal. Bars that are only dropped draw themselves once
+    /// more (indicatif's default), which left a stale bar above the summary or the error.
+    fn clear(&self) {
+        if let Ok(bars) = self.bars.lock() {
+            for bar in bars.values() {
+                bar.finish_and_clear();
+            }
+        }
+        if let Some(m) = &self.multi {
+            let _ = m.clear();
+        }
+    }
 }
 
 impl Progress for Bars {
@@ -155,9 +177,24 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
         }
     }
     let frames = parse_frames(args.frames.as_deref(), anim.frames)?;
+    if let Some(end) =
+        args.frames.as_deref().and_then(|f| f.split_once("..")).and_then(|(_, b)| b.trim().parse::<usize>().ok())
+        && end > anim.frames
+    {
+        log::warn!(
+            "--frames '{}': the input has only {} frames; rendering {}..{}",
+            args.frames.as_deref().unwrap_or_default(),
+            anim.frames,
+            frames.start + 1,
+            frames.end
+        );
+    }
     let mut opts = RenderOptions::new(args.output.clone(), frames.clone());
     if let Some(path) = &args.styles {
         let (default, layers) = read_styles(path)?;
+        for (layer, _) in &layers {
+            anim.find_region(layer).with_context(|| format!("in the styles file '{}'", path.display()))?;
+        }
         opts.default_style = default;
         opts.styles = layers;
     }
@@ -173,7 +210,30 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     opts.gif = args.gif.clone();
     opts.exemplar_dirs = args.exemplar_dir.clone();
     opts.background = args.background.clone();
-    opts.recolor = args.recolor;
+    // Mask sequences are white on nothing: glazed in their own color they would not show.
+    let masks_only = anim.regions.iter().all(|r| r.kind == anim::RegionKind::MaskSequence);
+    opts.recolor = args.recolor.unwrap_or(if masks_only { Recolor::None } else { Recolor::Glaze });
+    if opts.recolor == Recolor::Glaze {
+        let paper = match args.background.as_deref() {
+            None => Some(anim.background.as_ref().map(|b| b.color).unwrap_or([1.0; 4])),
+            Some(spec) => fluidymation::composite::parse_color(spec),
+        };
+        for (i, r) in anim.regions.iter().enumerate() {
+            // The last --style naming the layer wins, else the default.
+            let style = opts.styles.iter().rev().find(|(k, _)| anim.find_region(k).ok() == Some(i)).map(|(_, e)| e);
+            let flat = style.or(opts.default_style.as_ref()).is_some_and(|e| e == render::NO_STYLE);
+            if let Some(p) = paper
+                && !flat
+                && (0..3).all(|i| (r.color[i] - p[i]).abs() < 0.02)
+            {
+                log::warn!(
+                    "layer '{}' has the background's color: a glaze of it does not show; \
+                     try --recolor none (the exemplar's colors) or another --background",
+                    r.name
+                );
+            }
+        }
+    }
     opts.strokes = args.strokes;
     opts.params = params;
     opts.scale = args.scale;
@@ -181,7 +241,12 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     opts.resume = args.resume;
     opts.eval = args.eval;
 
-    let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::SeqCst));
+    // The first Ctrl-C stops after the frame in progress (resumable); a second one quits at once.
+    let _ = ctrlc::set_handler(|| {
+        if INTERRUPTED.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+    });
     let show = !ctx.quiet && std::io::stderr().is_terminal();
     let bars = Bars {
         multi: show.then(|| MultiProgress::with_draw_target(ProgressDrawTarget::stderr())),
@@ -189,9 +254,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
         interrupted: &INTERRUPTED,
     };
     let result = render::render(&anim, &opts, &bars);
-    if let Some(m) = &bars.multi {
-        let _ = m.clear();
-    }
+    bars.clear();
     let summary = match result {
         Ok(s) => s,
         Err(Error::Cancelled) => {
@@ -220,6 +283,9 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
                 l.exemplar.as_deref().unwrap_or("(flat)"),
                 l.seconds
             );
+        }
+        if args.keep_layers {
+            eprintln!("layers -> {}", args.output.join("layers").display());
         }
     }
     for l in &summary.layers {

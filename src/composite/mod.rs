@@ -102,8 +102,8 @@ pub enum StrokeMode {
     /// Drawn crisp (antialiased vector rendering) on top of their layer.
     #[default]
     Keep,
-    /// Stylized with the fill (the renderer merges them into the region before synthesis, see
-    /// [`merge_strokes`]); nothing extra is drawn here.
+    /// Painted like the fill: merged into the layer's region before synthesis; nothing is
+    /// drawn on top.
     Stylize,
     /// Not drawn.
     Drop,

@@ -66,11 +66,61 @@ pub fn layer_dir(out_dir: &Path, region: &Region) -> PathBuf {
 /// Creates `dir` (and its parents) if needed and checks that files can be created in it,
 /// so that an unwritable output directory fails before any work is done.
 pub fn prepare_dir(dir: &Path) -> Result<()> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    if dir.exists() && !dir.is_dir() {
+        return Err(Error::io(
+            dir,
+            std::io::Error::new(std::io::ErrorKind::NotADirectory, "exists and is not a directory"),
+        ));
+    }
+    if let Err(e) = std::fs::create_dir_all(dir) {
+        // Name the part of the path that is in the way (a file where a folder should be).
+        let blocker = dir.ancestors().skip(1).find(|a| a.exists() && !a.is_dir());
+        return Err(match blocker {
+            Some(b) => Error::io(
+                dir,
+                std::io::Error::new(
+                    e.kind(),
+                    format!("cannot create it: '{}' is a file, not a directory", b.display()),
+                ),
+            ),
+            None => Error::io(dir, e),
+        });
+    }
     let probe = dir.join(format!(".fluidymation-write-test.{}", std::process::id()));
     std::fs::write(&probe, b"").map_err(|e| Error::io(dir, e))?;
     std::fs::remove_file(&probe).map_err(|e| Error::io(dir, e))?;
     Ok(())
+}
+
+/// Removes the temporary files that an atomic write of a killed process left in `dir`
+/// (`.NAME.PID.tmp` for PNG, GIF and resume-state files, see [`img::atomic_write`]; only
+/// those of the file `only` when given), except those of processes still running. Returns
+/// how many were removed; errors are ignored.
+pub fn remove_stale_temporaries(dir: &Path, only: Option<&str>) -> usize {
+    let Ok(entries) = std::fs::read_dir(dir) else { return 0 };
+    let own = std::process::id().to_string();
+    let proc_fs = Path::new("/proc/self").exists();
+    let mut removed = 0;
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(name) = name.to_str() else { continue };
+        let Some(inner) = name.strip_prefix('.').and_then(|n| n.strip_suffix(".tmp")) else { continue };
+        let Some((target, pid)) = inner.rsplit_once('.') else { continue };
+        let ours = match only {
+            Some(file) => target == file,
+            None => [".png", ".gif", ".state", ".toml"].iter().any(|ext| target.ends_with(ext)),
+        };
+        if !ours || pid.is_empty() || !pid.bytes().all(|b| b.is_ascii_digit()) || pid == own {
+            continue;
+        }
+        if proc_fs && Path::new("/proc").join(pid).exists() {
+            continue; // another render is writing it right now
+        }
+        if entry.file_type().map(|t| t.is_file()).unwrap_or(false) && std::fs::remove_file(entry.path()).is_ok() {
+            removed += 1;
+        }
+    }
+    removed
 }
 
 #[cfg(test)]
@@ -85,5 +135,36 @@ mod tests {
         assert_eq!(frame_path(d, 0, 10_000), Path::new("out/00001.png"));
         assert_eq!(frame_path(d, 9999, 10_000), Path::new("out/10000.png"));
         assert_eq!(frame_path(d, 0, 0), Path::new("out/0001.png"));
+    }
+
+    #[test]
+    fn stale_temporaries_of_dead_processes_are_removed() {
+        let dir = std::env::temp_dir().join(format!("fm-output-stale-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        // A pid that cannot be running (above the Linux maximum 2^22).
+        let dead = 4_999_999;
+        let own = std::process::id();
+        let names = [
+            format!(".0003.png.{dead}.tmp"),
+            format!(".demo.gif.{dead}.tmp"),
+            format!(".0004.png.{own}.tmp"),
+            format!(".notes.txt.{dead}.tmp"),
+            "0001.png".to_string(),
+            ".hidden".to_string(),
+        ];
+        for n in &names {
+            std::fs::write(dir.join(n), b"x").unwrap();
+        }
+        assert_eq!(remove_stale_temporaries(&dir, Some("other.gif")), 0);
+        assert_eq!(remove_stale_temporaries(&dir, None), 2);
+        let mut left: Vec<String> =
+            std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        left.sort();
+        assert_eq!(
+            left,
+            [format!(".0004.png.{own}.tmp"), ".hidden".into(), format!(".notes.txt.{dead}.tmp"), "0001.png".into()]
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

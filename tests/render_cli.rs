@@ -1,0 +1,695 @@
+//! `fluidymation render` end to end, as a user runs it: the built binary is spawned and we
+//! look at its exit code, its messages and the files it leaves.
+//!
+//! Runs are kept small (`--scale 0.5`, a few frames). Synthesis is stochastic, so the
+//! stylized pixels are checked by statistics (mean hue), never against reference pixels;
+//! only determinism (same seed, any thread count, resume) is checked byte for byte.
+//!
+//! Inputs: the bundled demo `fixtures/demo/waving.json` (400×400, 48 frames at 24 fps, five
+//! layers over a paper background) and `tests/render/quads.json` (280×280, 8 frames at 12 fps,
+//! four big, well-separated squares of one color each, slightly moving, no background).
+
+use std::collections::BTreeMap;
+use std::io::BufReader;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_fluidymation"))
+}
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn demo() -> PathBuf {
+    root().join("fixtures/demo/waving.json")
+}
+
+fn quads() -> PathBuf {
+    root().join("tests/render/quads.json")
+}
+
+/// A scratch directory removed at the end of the test (also when it fails).
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(name: &str) -> Scratch {
+        let dir = std::env::temp_dir().join(format!("fm-render-{}-{}", name, std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+
+    fn join(&self, p: &str) -> PathBuf {
+        self.0.join(p)
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn render(input: &Path, out: &Path, args: &[&str]) -> Output {
+    bin().arg("render").arg(input).arg("-o").arg(out).args(args).output().unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[track_caller]
+fn assert_success(o: &Output) {
+    assert!(o.status.success(), "exit {:?}\n{}", o.status.code(), stderr(o));
+}
+
+/// Every file and folder below `dir` (relative paths, hidden ones included), sorted.
+fn tree(dir: &Path) -> Vec<String> {
+    fn walk(base: &Path, dir: &Path, out: &mut Vec<String>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            out.push(p.strip_prefix(base).unwrap().to_string_lossy().into_owned());
+            if p.is_dir() {
+                walk(base, &p, out);
+            }
+        }
+    }
+    let mut out = Vec::new();
+    walk(dir, dir, &mut out);
+    out.sort();
+    out
+}
+
+fn frame_names(range: std::ops::RangeInclusive<usize>) -> Vec<String> {
+    range.map(|k| format!("{k:04}.png")).collect()
+}
+
+/// The bytes of every `NNNN.png` in `dir`, by name.
+fn png_bytes(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    tree(dir)
+        .into_iter()
+        .filter(|n| n.ends_with(".png") && !n.contains('/'))
+        .map(|n| (n.clone(), std::fs::read(dir.join(&n)).unwrap()))
+        .collect()
+}
+
+fn rgba(path: &Path) -> image::RgbaImage {
+    image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgba8()
+}
+
+fn hex(s: &str) -> [f64; 3] {
+    let s = s.trim_start_matches('#');
+    [0, 2, 4].map(|i| u8::from_str_radix(&s[i..i + 2], 16).unwrap() as f64 / 255.0)
+}
+
+fn to_linear(v: f64) -> f64 {
+    if v <= 0.04045 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) }
+}
+
+fn to_srgb(v: f64) -> f64 {
+    let v = v.clamp(0.0, 1.0);
+    if v <= 0.003_130_8 { v * 12.92 } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
+}
+
+/// HSV hue in degrees and chroma (max − min) of an sRGB color in `0..=1`.
+fn hue(c: [f64; 3]) -> (f64, f64) {
+    let max = c[0].max(c[1]).max(c[2]);
+    let min = c[0].min(c[1]).min(c[2]);
+    let d = max - min;
+    if d <= 0.0 {
+        return (0.0, 0.0);
+    }
+    let h = if max == c[0] {
+        (c[1] - c[2]) / d
+    } else if max == c[1] {
+        2.0 + (c[2] - c[0]) / d
+    } else {
+        4.0 + (c[0] - c[1]) / d
+    };
+    ((h * 60.0).rem_euclid(360.0), d)
+}
+
+fn hue_distance(a: f64, b: f64) -> f64 {
+    ((a - b + 540.0).rem_euclid(360.0) - 180.0).abs()
+}
+
+/// Chroma-weighted circular mean hue of the painted pixels: those that differ from the
+/// background `bg` by more than 0.1 in some channel and have a chroma above 0.02 (the hue
+/// of near-gray pixels is noise). Returns the mean hue and the number of pixels used.
+#[derive(Default)]
+struct HueMean {
+    x: f64,
+    y: f64,
+    n: usize,
+}
+
+impl HueMean {
+    fn add(&mut self, c: [f64; 3], bg: [f64; 3]) {
+        let differs = (0..3).any(|i| (c[i] - bg[i]).abs() > 0.1);
+        let (h, chroma) = hue(c);
+        if differs && chroma > 0.02 {
+            self.x += chroma * h.to_radians().cos();
+            self.y += chroma * h.to_radians().sin();
+            self.n += 1;
+        }
+    }
+
+    fn mean(&self) -> f64 {
+        self.y.atan2(self.x).to_degrees().rem_euclid(360.0)
+    }
+}
+
+fn px(img: &image::RgbaImage, x: u32, y: u32) -> [f64; 3] {
+    let p = img.get_pixel(x, y);
+    [p[0] as f64 / 255.0, p[1] as f64 / 255.0, p[2] as f64 / 255.0]
+}
+
+/// Hue tolerance of a stylized layer against its target color, in degrees. Measured
+/// (seed 1): demo layers within 4.2° of their fill (arm 4.2, head 1.8, scarf 0.1, dress 2.2,
+/// legs 0.5); quads within 2.3° (red 0.1, green 0.5, blue 2.3); under `--recolor none`
+/// within 0.6° of the exemplar's own paint. The glaze raises the tint to the pigment amount
+/// (`T = F^a`, Beer–Lambert), which shifts the sRGB hue a little where the paint is lighter
+/// or darker than typical. Twice the largest error measured still tells apart every pair of
+/// colors compared here (the closest, rose-burst's paint and the red fill, are 35° apart).
+const HUE_TOLERANCE: f64 = 8.0;
+
+#[test]
+fn demo_renders_frames_layers_and_gif() {
+    let tmp = Scratch::new("demo");
+    let out = tmp.join("out");
+    let gif = tmp.join("out/demo.gif");
+    let o =
+        render(&demo(), &out, &["--frames", "1..6", "--scale", "0.5", "--keep-layers", "--gif", gif.to_str().unwrap()]);
+    assert_success(&o);
+
+    // Exactly the frames, the GIF and the layers; no temporary files, no resume state.
+    let slugs = ["01_arm", "02_head", "03_scarf", "04_dress", "05_legs"];
+    let mut expected = frame_names(1..=6);
+    expected.push("demo.gif".into());
+    expected.push("layers".into());
+    for s in slugs {
+        expected.push(format!("layers/{s}"));
+        expected.extend(frame_names(1..=6).iter().map(|f| format!("layers/{s}/{f}")));
+    }
+    expected.sort();
+    assert_eq!(tree(&out), expected);
+    for f in frame_names(1..=6) {
+        let img = rgba(&out.join(&f));
+        assert_eq!(img.dimensions(), (200, 200), "{f}");
+        // The demo's own background (its bottom solid, #f3ede2) fills the corner.
+        assert_eq!(img.get_pixel(2, 2).0, [0xf3, 0xed, 0xe2, 255], "{f}");
+    }
+
+    // The summary names the frame count, the time per frame and every output.
+    let err = stderr(&o);
+    assert!(err.contains("6 frames in") && err.contains("s/frame"), "{err}");
+    assert!(err.contains(out.to_str().unwrap()) && err.contains(gif.to_str().unwrap()), "{err}");
+    assert!(err.contains("layers"), "{err}");
+    for name in ["arm", "head", "scarf", "dress", "legs"] {
+        assert!(err.contains(name), "{name} in {err}");
+    }
+    // stderr is not a terminal here: no progress bars.
+    assert!(!err.contains('\u{1b}') && !err.contains('█'), "{err}");
+
+    check_gif(&gif, &out, 6, 24.0, (200, 200));
+
+    // Per layer, the stylized pixels' mean hue is the layer's fill color (from `inspect`).
+    let info = bin().args(["inspect", "--json"]).arg(demo()).output().unwrap();
+    assert_success(&info);
+    let info: serde_json::Value = serde_json::from_slice(&info.stdout).unwrap();
+    for (i, s) in slugs.iter().enumerate() {
+        let fill = info["regions"][i]["color"].as_str().unwrap();
+        let mut mean = HueMean::default();
+        for f in frame_names(1..=6) {
+            let img = rgba(&out.join("layers").join(s).join(&f));
+            assert_eq!(img.dimensions(), (200, 200));
+            for p in img.pixels() {
+                // The layer alone over white, composited in linear light as the renderer does.
+                let a = p[3] as f64 / 255.0;
+                let c = [0, 1, 2].map(|i| to_srgb(to_linear(p[i] as f64 / 255.0) * a + 1.0 - a));
+                mean.add(c, [1.0; 3]);
+            }
+        }
+        assert!(mean.n > 200, "{s}: only {} painted pixels", mean.n);
+        let target = hue(hex(fill)).0;
+        let error = hue_distance(mean.mean(), target);
+        assert!(error < HUE_TOLERANCE, "{s}: mean hue {:.1}° vs fill {fill} {target:.1}°", mean.mean());
+    }
+}
+
+/// Decodes the GIF, checks size, loop, delays and total duration, and that every GIF frame
+/// shows the PNG frame that starts at the same time (within what palette and dithering cost).
+fn check_gif(gif: &Path, frames_dir: &Path, frames: usize, fps: f64, size: (u32, u32)) {
+    let mut options = gif::DecodeOptions::new();
+    options.set_color_output(gif::ColorOutput::RGBA);
+    let mut decoder = options.read_info(BufReader::new(std::fs::File::open(gif).unwrap())).unwrap();
+    assert_eq!((decoder.width() as u32, decoder.height() as u32), size);
+    let (w, h) = (size.0 as usize, size.1 as usize);
+    let mut canvas = vec![0u8; w * h * 4];
+    let pngs: Vec<PathBuf> = {
+        let mut v: Vec<PathBuf> = tree(frames_dir)
+            .into_iter()
+            .filter(|n| n.ends_with(".png") && !n.contains('/'))
+            .map(|n| frames_dir.join(n))
+            .collect();
+        v.sort();
+        v
+    };
+    assert_eq!(pngs.len(), frames);
+    let start_cs = |k: usize| (k as f64 * 100.0 / fps).round() as u64;
+    let mut t = 0u64;
+    let mut shown = 0;
+    while let Some(frame) = decoder.read_next_frame().unwrap() {
+        // Identical consecutive frames are merged into a longer one, so a GIF frame starts
+        // at the start time of the PNG frame it shows.
+        let k = (0..frames).find(|&k| start_cs(k) == t).unwrap_or_else(|| panic!("no frame starts at {t} cs"));
+        assert!(frame.delay >= 2, "delay {} cs", frame.delay);
+        let (fx, fy, fw) = (frame.left as usize, frame.top as usize, frame.width as usize);
+        for (i, p) in frame.buffer.chunks(4).enumerate() {
+            if p[3] > 0 {
+                let j = ((fy + i / fw) * w + fx + i % fw) * 4;
+                canvas[j..j + 4].copy_from_slice(p);
+            }
+        }
+        let png = rgba(&pngs[k]);
+        let diff: u64 = png
+            .as_raw()
+            .chunks(4)
+            .zip(canvas.chunks(4))
+            .map(|(a, b)| (0..3).map(|i| (a[i] as i64 - b[i] as i64).unsigned_abs()).sum::<u64>())
+            .sum();
+        let mean = diff as f64 / (w * h * 3) as f64;
+        // Measured 0.13–0.15 levels on average (palette and dithering).
+        assert!(mean < 1.0, "GIF frame at {t} cs differs from {} by {mean:.2} levels", pngs[k].display());
+        t += frame.delay as u64;
+        shown += 1;
+    }
+    assert!(shown >= 1 && shown <= frames, "{shown} GIF frames for {frames}");
+    assert_eq!(t, start_cs(frames), "total duration in 1/100 s");
+    assert_eq!(decoder.repeat(), gif::Repeat::Infinite);
+}
+
+/// Quadrants of the 140×140 quads render (at `--scale 0.5`), with their fill colors.
+const QUADS: [(&str, &str, u32, u32); 4] =
+    [("red", "#d92633", 0, 0), ("green", "#2e9e4a", 70, 0), ("blue", "#3366d9", 0, 70), ("orange", "#f08c1e", 70, 70)];
+
+/// Mean hue and number of the painted pixels of a quadrant over frames 1..=4 on white, and
+/// the standard deviation (0..255) of the luminance in a 24×24 block inside its square.
+fn quadrant_stats(out: &Path, x0: u32, y0: u32) -> (f64, f64, usize) {
+    let mut mean = HueMean::default();
+    let mut luma = Vec::new();
+    for f in frame_names(1..=4) {
+        let img = rgba(&out.join(&f));
+        assert_eq!(img.dimensions(), (140, 140));
+        for y in y0..y0 + 70 {
+            for x in x0..x0 + 70 {
+                let c = px(&img, x, y);
+                mean.add(c, [1.0; 3]);
+                if (x0 + 22..x0 + 46).contains(&x) && (y0 + 22..y0 + 46).contains(&y) {
+                    luma.push(255.0 * (0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]));
+                }
+            }
+        }
+    }
+    let m = luma.iter().sum::<f64>() / luma.len() as f64;
+    let sd = (luma.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / luma.len() as f64).sqrt();
+    (mean.mean(), sd, mean.n)
+}
+
+/// Mean hue of an exemplar's own paint, measured like the renders: its painted pixels
+/// (mask ≥ ½) with the paper normalized to white (`I / P` in linear light, as `--recolor
+/// none` glazes them). The exemplars' nominal `pigment` colors differ from this by up to 7°
+/// (rose-burst: #b71c71 is 327°, its paint 320°).
+fn exemplar_hue(exemplar: &str) -> f64 {
+    let search = fluidymation::exemplar::SearchPath::standard(&[]);
+    let ex = fluidymation::exemplar::find(exemplar, &search).unwrap();
+    let paper = ex.paper().map(|v| to_linear(v as f64));
+    let mut mean = HueMean::default();
+    for (frame, mask) in ex.frames.iter().zip(&ex.masks) {
+        for (c, &m) in frame.data().iter().zip(mask.data()) {
+            if m >= 0.5 {
+                mean.add([0, 1, 2].map(|i| to_srgb(to_linear(c[i] as f64) / paper[i])), [1.0; 3]);
+            }
+        }
+    }
+    assert!(mean.n > 1000, "{exemplar}: {} painted pixels", mean.n);
+    mean.mean()
+}
+
+#[test]
+fn glaze_takes_each_layer_fill_hue_with_any_exemplar() {
+    let tmp = Scratch::new("glaze");
+    let out = tmp.join("out");
+    // A styles file: a default, two layers with other exemplars, one left flat.
+    let styles = tmp.join("styles.toml");
+    std::fs::write(
+        &styles,
+        "default = \"blue-bloom\"\n\n[layers]\nred = \"rose-burst\"\ngreen = \"yellow-granules\"\norange = \"none\"\n",
+    )
+    .unwrap();
+    let o = render(&quads(), &out, &["--scale", "0.5", "--frames", "1..4", "--styles", styles.to_str().unwrap()]);
+    assert_success(&o);
+    assert_eq!(tree(&out), frame_names(1..=4));
+    let err = stderr(&o);
+    for (layer, exemplar) in
+        [("red", "rose-burst"), ("green", "yellow-granules"), ("blue", "blue-bloom"), ("orange", "(flat)")]
+    {
+        assert!(err.lines().any(|l| l.contains(layer) && l.contains(exemplar)), "{layer} {exemplar} in {err}");
+    }
+    for (name, fill, x0, y0) in &QUADS[..3] {
+        let (mean, sd, n) = quadrant_stats(&out, *x0, *y0);
+        assert!(n > 4 * 500, "{name}: {n} painted pixels");
+        let error = hue_distance(mean, hue(hex(fill)).0);
+        assert!(error < HUE_TOLERANCE, "{name}: mean hue {mean:.1}° vs fill {fill} (error {error:.1}°)");
+        // Stylized, not flat: the paint varies inside (measured 12.5–19.3 levels; flat: 0).
+        assert!(sd > 4.0, "{name}: luminance sd {sd:.1}");
+    }
+    // The layer left flat keeps its exact color inside (it moves from (105, 105) to (103, 103)).
+    for f in frame_names(1..=4) {
+        let img = rgba(&out.join(&f));
+        for y in 92..116 {
+            for x in 92..116 {
+                let p = img.get_pixel(x, y).0;
+                assert!(
+                    p[3] == 255 && (0..3).all(|i| (p[i] as i32 - [240, 140, 30][i]).abs() <= 1),
+                    "{f} ({x}, {y}): {p:?}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn recolor_none_keeps_the_exemplar_colors() {
+    let tmp = Scratch::new("recolor-none");
+    let out = tmp.join("out");
+    let o = render(
+        &quads(),
+        &out,
+        &["--scale", "0.5", "--frames", "1..4", "--recolor", "none", "--style", "red=rose-burst"],
+    );
+    assert_success(&o);
+    for (name, fill, x0, y0) in QUADS {
+        let exemplar = if name == "red" { "rose-burst" } else { "blue-bloom" };
+        let (mean, _, n) = quadrant_stats(&out, x0, y0);
+        assert!(n > 4 * 500, "{name}: {n} painted pixels");
+        let paint = exemplar_hue(exemplar);
+        let error = hue_distance(mean, paint);
+        assert!(error < HUE_TOLERANCE, "{name}: mean hue {mean:.1}° vs {exemplar}'s paint {paint:.1}°");
+        // …and not the layer's own color.
+        assert!(hue_distance(mean, hue(hex(fill)).0) > 20.0, "{name}: {mean:.1}° is its fill {fill}");
+    }
+}
+
+#[test]
+fn same_seed_same_bytes_on_any_thread_count() {
+    let tmp = Scratch::new("seed");
+    let args = |seed: &'static str, threads: &'static str| {
+        ["--frames", "1..3", "--scale", "0.5", "--seed", seed, "--threads", threads, "--quiet"]
+    };
+    let a = render(&demo(), &tmp.join("a"), &args("7", "1"));
+    let b = render(&demo(), &tmp.join("b"), &args("7", "2"));
+    let c = render(&demo(), &tmp.join("c"), &args("8", "2"));
+    for o in [&a, &b, &c] {
+        assert_success(o);
+        assert_eq!(stderr(o), "", "--quiet prints nothing");
+    }
+    let (a, b, c) = (png_bytes(&tmp.join("a")), png_bytes(&tmp.join("b")), png_bytes(&tmp.join("c")));
+    assert_eq!(a.keys().cloned().collect::<Vec<_>>(), frame_names(1..=3));
+    assert!(a == b, "--threads 1 and --threads 2 give different bytes with the same seed");
+    // Another seed: other paint (measured: ~5000 of the 40 000 pixels differ).
+    let (x, y) = (rgba(&tmp.join("a/0003.png")), rgba(&tmp.join("c/0003.png")));
+    let changed = x.pixels().zip(y.pixels()).filter(|(p, q)| p != q).count();
+    assert!(changed > 1000, "only {changed} pixels differ between seeds 7 and 8");
+    assert_ne!(a["0003.png"], c["0003.png"]);
+}
+
+/// Spawns a render whose output we watch.
+fn spawn(input: &Path, out: &Path, args: &[&str]) -> Child {
+    bin()
+        .arg("render")
+        .arg(input)
+        .arg("-o")
+        .arg(out)
+        .args(args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+/// Waits until `path` exists (the child still running), at most two minutes.
+fn wait_for(child: &mut Child, path: &Path) {
+    let start = Instant::now();
+    while !path.exists() {
+        if let Some(status) = child.try_wait().unwrap() {
+            panic!("the render ended ({status}) before {} existed", path.display());
+        }
+        assert!(start.elapsed() < Duration::from_secs(120), "{} never appeared", path.display());
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+fn interrupt(child: &Child) {
+    let status = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(status.success());
+}
+
+#[cfg(unix)]
+#[test]
+fn interrupted_renders_resume_to_the_same_bytes() {
+    let tmp = Scratch::new("resume");
+    let args = ["--frames", "1..10", "--scale", "0.5", "--keep-layers"];
+    let full = tmp.join("full");
+    let gif = full.join("demo.gif");
+    assert_success(&render(&demo(), &full, &[&args[..], &["--gif", gif.to_str().unwrap()]].concat()));
+    assert!(!full.join(".fluidymation").exists(), "the resume state is removed after success");
+
+    let out = tmp.join("out");
+    let state = out.join(".fluidymation");
+    let resume: Vec<&str> = args.iter().copied().chain(["--resume"]).collect();
+
+    // Ctrl-C before the first frame: exit 130 with a hint, and resumable.
+    let mut child = spawn(&demo(), &out, &args);
+    wait_for(&mut child, &state.join("progress.toml"));
+    interrupt(&child);
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("interrupted") && err.contains("--resume") && err.contains(out.to_str().unwrap()), "{err}");
+    assert!(!out.join("0001.png").exists(), "the interrupt came before the first frame");
+
+    // Killed (SIGKILL) in the middle of the resumed render.
+    let mut child = spawn(&demo(), &out, &resume);
+    wait_for(&mut child, &out.join("0005.png"));
+    child.kill().unwrap();
+    child.wait().unwrap();
+    // What a kill during a write leaves behind (the pid is above any Linux pid).
+    std::fs::write(out.join(".0006.png.4999999.tmp"), b"half a PNG").unwrap();
+
+    // Resuming with other options is refused, and nothing is touched.
+    let before = png_bytes(&out);
+    let other: Vec<&str> = resume.iter().copied().chain(["--seed", "2"]).collect();
+    let o = render(&demo(), &out, &other);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("resume with the same options") && !err.contains("panicked"), "{err}");
+    assert_eq!(png_bytes(&out), before);
+
+    // Ctrl-C in the middle.
+    let mut child = spawn(&demo(), &out, &resume);
+    wait_for(&mut child, &out.join("0008.png"));
+    interrupt(&child);
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+
+    // The last resume finishes (and writes the GIF, which needs all frames); everything
+    // equals the uninterrupted render, byte for byte.
+    let gif = out.join("demo.gif");
+    let o = render(&demo(), &out, &[&resume[..], &["--gif", gif.to_str().unwrap()]].concat());
+    assert_success(&o);
+    assert!(stderr(&o).contains("resumed"), "{}", stderr(&o));
+    assert_eq!(tree(&out), tree(&full), "same files, no temporary or state files left");
+    assert!(png_bytes(&out) == png_bytes(&full), "resumed frames differ from the uninterrupted render");
+    assert!(std::fs::read(&gif).unwrap() == std::fs::read(full.join("demo.gif")).unwrap(), "the GIFs differ");
+    for layer in tree(&full.join("layers")).iter().filter(|n| !n.contains('/')) {
+        let (a, b) = (png_bytes(&out.join("layers").join(layer)), png_bytes(&full.join("layers").join(layer)));
+        assert!(a == b, "layer {layer} differs after resuming");
+    }
+}
+
+/// One error case: the render must fail with exit code 1 and a message holding `needles`,
+/// without panicking and without creating its output directory.
+#[track_caller]
+fn fails(tmp: &Scratch, case: &str, input: &Path, args: &[&str], needles: &[&str]) {
+    let out = tmp.join(case);
+    let o = render(input, &out, args);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{case}: {err}");
+    assert!(err.starts_with("error: "), "{case}: {err}");
+    assert!(!err.contains("panicked"), "{case}: {err}");
+    for n in needles {
+        assert!(err.contains(n), "{case}: '{n}' not in\n{err}");
+    }
+    assert!(!out.exists(), "{case}: the output directory was created");
+}
+
+#[test]
+fn every_error_is_a_clear_message_and_exit_code_1() {
+    let tmp = Scratch::new("errors");
+    let d = demo();
+    fn quick<'a>(extra: &[&'a str]) -> Vec<&'a str> {
+        let mut v = vec!["--frames", "1..2", "--scale", "0.25"];
+        v.extend_from_slice(extra);
+        v
+    }
+    let layers = ["arm", "head", "scarf", "dress", "legs"];
+    let exemplars = ["blue-bloom", "rose-burst", "yellow-granules", "ink-rims", "green-wash"];
+
+    let mut needles = vec!["no layer named 'nose'"];
+    needles.extend(layers);
+    fails(&tmp, "unknown-layer", &d, &quick(&["--style", "nose=ink-rims"]), &needles);
+    fails(&tmp, "bad-style", &d, &quick(&["--style", "arm"]), &["--style 'arm'", "LAYER=EXEMPLAR"]);
+
+    let mut needles = vec!["no exemplar named 'inkk'"];
+    needles.extend(exemplars);
+    fails(&tmp, "unknown-exemplar", &d, &quick(&["--style", "arm=inkk"]), &needles);
+    let mut needles = vec!["no exemplar named 'nope'"];
+    needles.extend(exemplars);
+    fails(&tmp, "unknown-default", &d, &quick(&["--exemplar", "nope"]), &needles);
+
+    // Unwritable output: a file where a directory should be (permissions do not stop root).
+    let file = tmp.join("a-file");
+    std::fs::write(&file, b"x").unwrap();
+    let f = file.to_str().unwrap();
+    for (case, out) in [("out-below-file", format!("{f}/out")), ("out-is-file", f.to_string())] {
+        let o = render(&d, Path::new(&out), &quick(&[]));
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{case}: {err}");
+        assert!(err.contains(f) && err.contains("not a directory"), "{case}: {err}");
+        assert_eq!(err.matches("not a directory").count(), 1, "{case}: said once\n{err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+    assert_eq!(std::fs::read(&file).unwrap(), b"x");
+    let gif_dir = tmp.join("gif-is-dir");
+    std::fs::create_dir_all(&gif_dir).unwrap();
+    fails(&tmp, "gif-is-dir-out", &d, &quick(&["--gif", gif_dir.to_str().unwrap()]), &["gif-is-dir", "directory"]);
+
+    // A background image that does not load.
+    let broken = tmp.join("broken.png");
+    std::fs::write(&broken, b"this is not a PNG").unwrap();
+    fails(&tmp, "background", &d, &quick(&["--background", broken.to_str().unwrap()]), &["broken.png", "background"]);
+    fails(&tmp, "background-missing", &d, &quick(&["--background", "nowhere.png"]), &["nowhere.png", "background"]);
+
+    // An input with nothing to stylize (only a background solid).
+    fails(
+        &tmp,
+        "no-layers",
+        &root().join("tests/render/background_only.json"),
+        &[],
+        &["background_only.json", "no layer"],
+    );
+
+    // Styles files: malformed TOML, an unknown layer, a value that is not a name.
+    let write = |name: &str, text: &str| {
+        let p = tmp.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let bad = write("bad.toml", "default = \"blue-bloom\"\n[layers\narm = \"ink-rims\"\n");
+    fails(&tmp, "styles-toml", &d, &quick(&["--styles", &bad]), &[bad.as_str(), "line 2"]);
+    let nose = write("nose.toml", "[layers]\nnose = \"ink-rims\"\n");
+    let mut needles = vec!["nose", nose.as_str()];
+    needles.extend(layers);
+    fails(&tmp, "styles-layer", &d, &quick(&["--styles", &nose]), &needles);
+    let num = write("num.toml", "[layers]\narm = 3\n");
+    fails(&tmp, "styles-value", &d, &quick(&["--styles", &num]), &[num.as_str(), "arm", "string"]);
+    let unknown = write("unknown.toml", "defaults = \"ink-rims\"\n");
+    fails(&tmp, "styles-field", &d, &quick(&["--styles", &unknown]), &["defaults", "default"]);
+    fails(&tmp, "styles-missing", &d, &quick(&["--styles", "nowhere.toml"]), &["nowhere.toml"]);
+
+    // Frames outside the animation.
+    let range = ["--scale", "0.25", "--frames"];
+    fails(&tmp, "frames-after", &d, &[&range[..], &["49..60"]].concat(), &["49..60", "only 48 frames"]);
+    fails(&tmp, "frames-zero", &d, &[&range[..], &["0..3"]].concat(), &["--frames '0..3'", "1-based"]);
+    fails(&tmp, "frames-reversed", &d, &[&range[..], &["5..3"]].concat(), &["--frames '5..3'"]);
+
+    // Nothing to resume.
+    fails(&tmp, "resume-nothing", &d, &quick(&["--resume"]), &["no interrupted render", "without --resume"]);
+
+    fails(&tmp, "threads", &d, &quick(&["--threads", "0"]), &["--threads"]);
+    fails(&tmp, "scale", &d, &["--scale", "0"], &["scale"]);
+}
+
+#[test]
+fn help_describes_the_flags() {
+    let o = bin().args(["render", "--help"]).output().unwrap();
+    assert_success(&o);
+    let help = String::from_utf8(o.stdout).unwrap();
+    for flag in [
+        "--output",
+        "--gif",
+        "--style",
+        "--exemplar",
+        "--styles",
+        "--background",
+        "--recolor",
+        "--strokes",
+        "--scale",
+        "--frames",
+        "--seed",
+        "--threads",
+        "--keep-layers",
+        "--resume",
+        "--quiet",
+    ] {
+        assert!(help.contains(flag), "{flag} in\n{help}");
+    }
+    // No rustdoc syntax leaking into the help, no flag that `render` refuses.
+    assert!(!help.contains("[`"), "{help}");
+    assert!(!help.contains("--target-scale"), "{help}");
+}
+
+#[test]
+fn frames_past_the_end_are_clipped_with_a_warning() {
+    let tmp = Scratch::new("clip");
+    let out = tmp.join("out");
+    let o = render(&quads(), &out, &["--scale", "0.25", "--frames", "7..20"]);
+    assert_success(&o);
+    let err = stderr(&o);
+    assert!(err.contains("warning:") && err.contains("only 8 frames"), "{err}");
+    assert_eq!(tree(&out), frame_names(7..=8));
+}
+
+#[test]
+fn a_png_mask_sequence_is_painted_in_the_exemplar_colors() {
+    // White discs on black: no colors of their own, so by default the exemplar's colors.
+    let tmp = Scratch::new("masks");
+    let masks = tmp.join("masks");
+    std::fs::create_dir_all(&masks).unwrap();
+    for k in 0..3u32 {
+        let img = image::GrayImage::from_fn(100, 80, |x, y| {
+            let (dx, dy) = (x as f64 - 40.0 - 3.0 * k as f64, y as f64 - 40.0);
+            image::Luma([if dx * dx + dy * dy < 25.0 * 25.0 { 255 } else { 0 }])
+        });
+        img.save(masks.join(format!("m{k}.png"))).unwrap();
+    }
+    let out = tmp.join("out");
+    let o = render(&masks, &out, &[]);
+    assert_success(&o);
+    let mut mean = HueMean::default();
+    for f in frame_names(1..=3) {
+        let img = rgba(&out.join(f));
+        assert_eq!(img.dimensions(), (100, 80));
+        for (x, y, _) in img.enumerate_pixels() {
+            mean.add(px(&img, x, y), [1.0; 3]);
+        }
+    }
+    // A disc of radius 25 covers ~1960 pixels per frame; white glazed on white showed none.
+    assert!(mean.n > 3 * 1000, "only {} painted pixels", mean.n);
+    let paint = exemplar_hue("blue-bloom");
+    assert!(hue_distance(mean.mean(), paint) < HUE_TOLERANCE, "{:.1}° vs {paint:.1}°", mean.mean());
+}
