@@ -123,7 +123,7 @@ fn clear_errors_and_exit_code_1() {
     // An exemplar that is not a folder.
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_fluidymation"));
     let o = cmd.arg("eval").arg(s.path("out")).args(["--exemplar", "no-such-exemplar", "--masks"]).arg(s.path("masks"));
-    fails_with(&o.output().unwrap(), &["'no-such-exemplar' is not an exemplar folder"]);
+    fails_with(&o.output().unwrap(), &["no exemplar named 'no-such-exemplar'"]);
     // A bad option.
     fails_with(&s.run(&["--background", "blue"]), &["--background 'blue' is not a #rrggbb color"]);
     fails_with(&s.run(&["--interior-margin=-1"]), &["--interior-margin"]);
@@ -137,6 +137,6 @@ fn clear_errors_and_exit_code_1() {
     std::fs::remove_file(s.path("ex/exemplar.toml")).unwrap();
     img::save_gray(&s.path("masks/0006.png"), &Bloom { size: SIZE, frames: FRAMES }.mask(5)).unwrap();
     img::save_gray(&s.path("masks/0003.png"), &Bloom { size: SIZE, frames: FRAMES }.mask(2)).unwrap();
-    fails_with(&s.run(&[]), &["could not load the exemplar", "exemplar.toml"]);
+    fails_with(&s.run(&[]), &["could not load exemplar", "exemplar.toml"]);
     assert!(Path::new(&s.path("out/0001.png")).exists());
 }

@@ -353,7 +353,7 @@ mod tests {
             }
             let (i, x, y) = src.coords(list[rng.below(list.len())] as usize);
             let (cx, cy) = (x as f32 + rng.range_f32(-0.49, 0.49), y as f32 + rng.range_f32(-0.49, 0.49));
-            let th = rng.range_f32(-3.14, 3.14);
+            let th = rng.range_f32(-std::f32::consts::PI, std::f32::consts::PI);
             let (c, s) = (th.cos(), th.sin());
             let q = tgt.active[rng.below(tgt.active.len())] as usize;
             let query =
