@@ -8,7 +8,7 @@
 
 use super::nnf::{Nnf, offsets};
 use super::params::PATCH;
-use super::source::{IN_MASK, INTERIOR, PAD, SourceLevel};
+use super::source::{IN_MASK, INTERIOR, PAD, SourceLevel, floor_i32};
 use super::target::TargetLevel;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicI32, Ordering};
@@ -32,9 +32,9 @@ pub(crate) fn counts(src: &SourceLevel, nnf: &Nnf, tgt: &TargetLevel, r: usize) 
         let hi = (i + r + 1).min(frames);
         for (a, b) in offsets() {
             let (dx, dy) = m.rotate(a as f32, b as f32);
-            let px = (m.x + dx + PAD as f32 + 0.5).floor();
-            let py = (m.y + dy + PAD as f32 + 0.5).floor();
-            if px < 0.0 || py < 0.0 || px >= src.stride as f32 || py >= (src.frame_len / src.stride) as f32 {
+            let px = floor_i32(m.x + dx + PAD as f32 + 0.5);
+            let py = floor_i32(m.y + dy + PAD as f32 + 0.5);
+            if px < 0 || py < 0 || px >= src.stride as i32 || py >= (src.frame_len / src.stride) as i32 {
                 continue;
             }
             let pix = py as usize * src.stride + px as usize;

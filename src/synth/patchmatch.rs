@@ -9,10 +9,10 @@
 //! result does not depend on the thread count.
 
 use super::nnf::{Match, Nnf, aligning_rotation};
-use super::params::Params;
+use super::params::{HALF, PATCH, Params};
 use super::patch::{OmegaMap, Query, patch_error};
 use super::rng::Rng;
-use super::source::{INTERIOR, SourceLevel, VALID};
+use super::source::{INTERIOR, SourceLevel, VALID, floor_i32};
 use super::target::TargetLevel;
 use glam::Vec2;
 use rayon::prelude::*;
@@ -95,16 +95,36 @@ impl Ctx<'_> {
     /// Validates a candidate center: the nearest pixel is a valid center of the right segment.
     #[inline]
     pub fn check(&self, seg: Option<usize>, i: usize, x: f32, y: f32) -> Option<Vec2> {
-        let (_, inf) = self.src.info_at(i, x, y)?;
-        if inf.flags & VALID == 0 {
+        let (flags, dir) = self.src.hot_at(i, x, y)?;
+        if flags & VALID == 0 {
             return None;
         }
         if let Some(seg) = seg
-            && ((inf.flags & INTERIOR != 0) as usize) != seg
+            && ((flags & INTERIOR != 0) as usize) != seg
         {
             return None;
         }
-        Some(inf.dir)
+        Some(dir)
+    }
+
+    /// Hints the CPU to load the exemplar features and Ω rows a candidate at (i, x, y) reads.
+    #[inline(always)]
+    fn prefetch(&self, i: usize, x: f32, y: f32) {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(idx) = self.src.nearest(i, x, y) {
+            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+            let stride = self.src.stride;
+            let lo = idx.saturating_sub(HALF * stride + HALF);
+            for r in 0..PATCH {
+                let k = lo + r * stride;
+                // SAFETY: SSE is part of the x86_64 baseline, and a prefetch is a hint that never
+                // faults, whatever the address.
+                unsafe {
+                    _mm_prefetch::<_MM_HINT_T0>(self.src.feat.as_ptr().wrapping_add(k) as *const i8);
+                    _mm_prefetch::<_MM_HINT_T0>(self.omega.as_ptr().wrapping_add(k) as *const i8);
+                }
+            }
+        }
     }
 
     /// Full error of match `m` at target pixel q (∞ when its center is not usable).
@@ -195,17 +215,40 @@ impl Ctx<'_> {
             let (dx, dy) = n.rotate(e.0, e.1);
             self.try_candidate(q, query, &mut best, n.i as usize, n.x + dx, n.y + dy, Some(n.flip), stats);
         }
-        // Random search in windows of size α^k·(w, h, l_S) around the current best.
+        // Random search in windows of size α^k·(w, h, l_S) around the current best. The offsets
+        // do not depend on the evaluations, so each is drawn one step ahead and the next
+        // candidate's memory is prefetched while the current one is evaluated (the search is
+        // bound by the latency of reading the exemplar at random places, not by arithmetic).
         let (mut rx, mut ry, mut ri) = (self.src.w as f32, self.src.h as f32, self.src.frames as f32);
+        let alpha = self.params.alpha;
+        let mut draw = |rng: &mut Rng| {
+            if rx < 1.0 && ry < 1.0 {
+                return None;
+            }
+            let o = (rng.range_f32(-rx, rx), rng.range_f32(-ry, ry), rng.range_f32(-ri, ri));
+            (rx, ry, ri) = (rx * alpha, ry * alpha, ri * alpha);
+            Some(o)
+        };
         let last = (self.src.frames - 1) as f32;
-        while rx >= 1.0 || ry >= 1.0 {
-            let x = (best.x + rng.range_f32(-rx, rx)).round();
-            let y = (best.y + rng.range_f32(-ry, ry)).round();
-            let i = (best.i as f32 + rng.range_f32(-ri, ri)).round().clamp(0.0, last);
-            self.try_candidate(q, query, &mut best, i as usize, x, y, None, stats);
-            rx *= self.params.alpha;
-            ry *= self.params.alpha;
-            ri *= self.params.alpha;
+        let at = |best: &Match, (ox, oy, oi): (f32, f32, f32)| {
+            let x = floor_i32(best.x + ox + 0.5) as f32;
+            let y = floor_i32(best.y + oy + 0.5) as f32;
+            let i = (floor_i32(best.i as f32 + oi + 0.5) as f32).clamp(0.0, last);
+            (i as usize, x, y)
+        };
+        let mut next = draw(rng);
+        if let Some(o) = next {
+            let (i, x, y) = at(&best, o);
+            self.prefetch(i, x, y);
+        }
+        while let Some(o) = next {
+            next = draw(rng);
+            let (i, x, y) = at(&best, o);
+            if let Some(o) = next {
+                let (i, x, y) = at(&best, o);
+                self.prefetch(i, x, y);
+            }
+            self.try_candidate(q, query, &mut best, i, x, y, None, stats);
         }
         best
     }
