@@ -69,3 +69,37 @@ fn errors_exit_1_with_the_reason() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("only 48 frames"));
     let _ = std::fs::remove_file(&bad);
 }
+
+#[test]
+fn inspect_writes_guide_previews() {
+    let dir = std::env::temp_dir().join(format!("fm-cli-guides-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = bin().args(["inspect", "--frames", "10..14", "--guides"]).arg(&dir).arg(demo()).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("guide previews written to"));
+    let load = |name: &str| image::open(dir.join("01_arm").join(name)).unwrap();
+    for f in 10..=14 {
+        for kind in ["flow", "ext_pos", "ext_neg", "border"] {
+            let img = load(&format!("{kind}_{f:04}.png"));
+            assert_eq!((img.width(), img.height()), (400, 400), "{kind} {f}");
+        }
+    }
+    let lum = |name: &str| load(name).to_luma8().into_raw();
+    // The extents accumulate motion: nothing before the first frame of the range, nothing after
+    // its last; in between, the waving arm has moved.
+    assert!(lum("ext_pos_0010.png").iter().all(|&v| v == 0));
+    assert!(lum("ext_neg_0014.png").iter().all(|&v| v == 0));
+    assert!(lum("ext_pos_0014.png").iter().filter(|&&v| v > 64).count() > 50);
+    assert!(lum("ext_neg_0010.png").iter().filter(|&&v| v > 64).count() > 50);
+    // The flow of the moving arm is drawn in color (hue = direction), black where still.
+    let flow = load("flow_0012.png").to_rgb8();
+    let colored = flow.pixels().filter(|p| p.0.iter().max().unwrap() - p.0.iter().min().unwrap() > 40).count();
+    assert!(colored > 100, "{colored} colored flow pixels");
+    // The border channel rises from the edge into the interior: several levels inside.
+    let border = lum("border_0012.png");
+    let mut levels: Vec<u8> = border.iter().copied().filter(|&v| v > 0).collect();
+    levels.sort_unstable();
+    levels.dedup();
+    assert!(levels.len() >= 5, "{levels:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -3,6 +3,8 @@
 use super::Ctx;
 use anyhow::{Context, bail};
 use fluidymation::anim::{self, Animation, LoadOptions};
+use fluidymation::guide::preview::{PreviewOptions, write_previews};
+use fluidymation::guide::{GuideParams, GuideStream};
 use fluidymation::img::Plane;
 use rayon::prelude::*;
 use std::fmt::Write as _;
@@ -23,6 +25,12 @@ pub struct Args {
     /// antialiased edges; frame 0001 is the animation's first frame).
     #[arg(long, value_name = "DIR")]
     pub masks: Option<PathBuf>,
+    /// Write what the engine is guided by, per region and frame, to DIR/<NN>_<slug>/: the flow
+    /// as hue (direction) and brightness (speed) `flow_NNNN.png`, the motion extents
+    /// `ext_pos_NNNN.png` and `ext_neg_NNNN.png` as grayscale, and the border channel
+    /// `border_NNNN.png` (brightness scales are per frame and printed with -v).
+    #[arg(long, value_name = "DIR")]
+    pub guides: Option<PathBuf>,
     /// Only these frames, 1-based and inclusive: `A..B`, `A..`, `..B` or `N`.
     #[arg(long, value_name = "A..B")]
     pub frames: Option<String>,
@@ -128,6 +136,51 @@ fn measure(a: &Animation, range: &Range<usize>, masks: Option<&PathBuf>, ctx: &C
     Ok(sums.into_iter().map(|(s, n)| Stats { mean_coverage: if n > 0 { s / n as f64 } else { 0.0 } }).collect())
 }
 
+/// Writes the guide previews of every region over `range` into `dir` (regions in parallel,
+/// frames of a region streamed in order: ext− needs the backward pass over the range).
+fn write_guides(a: &Animation, range: &Range<usize>, dir: &std::path::Path, ctx: &Ctx) -> anyhow::Result<()> {
+    let params = GuideParams::default();
+    let opts = PreviewOptions::default();
+    let bar = (!ctx.quiet && std::io::stderr().is_terminal()).then(|| {
+        let pb = indicatif::ProgressBar::new((a.regions.len() * range.len()) as u64);
+        if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} guide frames {eta}") {
+            pb.set_style(style);
+        }
+        pb
+    });
+    let results: Vec<anyhow::Result<()>> = (0..a.regions.len())
+        .into_par_iter()
+        .map(|r| {
+            let region = &a.regions[r];
+            let d = dir.join(region.dir_name());
+            std::fs::create_dir_all(&d).with_context(|| format!("could not create '{}'", d.display()))?;
+            let masks = |k: usize| -> fluidymation::Result<Plane<f32>> { Ok(a.render(r, range.start + k)?.coverage()) };
+            let stream = GuideStream::new(range.len(), masks, &params)
+                .with_context(|| format!("could not compute the guides of '{}'", region.name))?;
+            for (k, g) in stream.enumerate() {
+                let f = range.start + k + 1;
+                let g = g.with_context(|| format!("could not compute the guides of '{}' frame {f}", region.name))?;
+                let s = write_previews(&g, &d, f, &opts)
+                    .with_context(|| format!("could not write the guide previews into '{}'", d.display()))?;
+                if ctx.verbose > 0 {
+                    eprintln!(
+                        "{} frame {f}: flow {:.3} px/frame and extent {:.1} px at full brightness",
+                        region.name, s.flow, s.ext
+                    );
+                }
+                if let Some(pb) = &bar {
+                    pb.inc(1);
+                }
+            }
+            Ok(())
+        })
+        .collect();
+    if let Some(pb) = bar {
+        pb.finish_and_clear();
+    }
+    results.into_iter().collect()
+}
+
 /// Runs `inspect`.
 pub fn run(args: Args, ctx: &Ctx) -> anyhow::Result<()> {
     let opts = LoadOptions { scale: args.scale, split_precomps: args.split_precomps };
@@ -137,6 +190,9 @@ pub fn run(args: Args, ctx: &Ctx) -> anyhow::Result<()> {
         None => 0..a.frames,
     };
     let stats = measure(&a, &range, args.masks.as_ref(), ctx)?;
+    if let Some(dir) = &args.guides {
+        write_guides(&a, &range, dir, ctx)?;
+    }
     let mut out = String::new();
     if args.json {
         let regions: Vec<serde_json::Value> = a
@@ -210,6 +266,9 @@ pub fn run(args: Args, ctx: &Ctx) -> anyhow::Result<()> {
     }
     if let Some(dir) = &args.masks {
         writeln!(out, "  masks written to {}", dir.display())?;
+    }
+    if let Some(dir) = &args.guides {
+        writeln!(out, "  guide previews written to {}", dir.display())?;
     }
     emit(&out)
 }
