@@ -22,6 +22,7 @@
 
 pub mod border;
 mod bundled;
+pub mod cache;
 pub mod generate;
 pub mod import;
 pub mod rng;

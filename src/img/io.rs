@@ -16,7 +16,10 @@ pub fn atomic_write(path: &Path, write: impl FnOnce(&mut dyn Write) -> std::io::
         _ => Path::new("."),
     };
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp = dir.join(format!(".{}.{}.tmp", name, std::process::id()));
+    // Unique per call, so concurrent writers of one path (threads too) never share a temporary.
+    static SERIAL: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let serial = SERIAL.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let tmp = dir.join(format!(".{}.{}-{}.tmp", name, std::process::id(), serial));
     let result = (|| -> std::io::Result<()> {
         let file = fs::File::create(&tmp)?;
         let mut w = BufWriter::new(file);

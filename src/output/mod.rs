@@ -93,7 +93,7 @@ pub fn prepare_dir(dir: &Path) -> Result<()> {
 }
 
 /// Removes the temporary files that an atomic write of a killed process left in `dir`
-/// (`.NAME.PID.tmp` for PNG, GIF and resume-state files, see [`img::atomic_write`]; only
+/// (`.NAME.PID-SERIAL.tmp` for PNG, GIF and resume-state files, see [`img::atomic_write`]; only
 /// those of the file `only` when given), except those of processes still running. Returns
 /// how many were removed; errors are ignored.
 pub fn remove_stale_temporaries(dir: &Path, only: Option<&str>) -> usize {
@@ -106,6 +106,8 @@ pub fn remove_stale_temporaries(dir: &Path, only: Option<&str>) -> usize {
         let Some(name) = name.to_str() else { continue };
         let Some(inner) = name.strip_prefix('.').and_then(|n| n.strip_suffix(".tmp")) else { continue };
         let Some((target, pid)) = inner.rsplit_once('.') else { continue };
+        // `PID` or `PID-SERIAL` (several writers in one process).
+        let pid = pid.split_once('-').map_or(pid, |(p, _)| p);
         let ours = match only {
             Some(file) => target == file,
             None => [".png", ".gif", ".state", ".toml"].iter().any(|ext| target.ends_with(ext)),
@@ -146,7 +148,7 @@ mod tests {
         let dead = 4_999_999;
         let own = std::process::id();
         let names = [
-            format!(".0003.png.{dead}.tmp"),
+            format!(".0003.png.{dead}-7.tmp"),
             format!(".demo.gif.{dead}.tmp"),
             format!(".0004.png.{own}.tmp"),
             format!(".notes.txt.{dead}.tmp"),

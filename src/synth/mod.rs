@@ -42,7 +42,7 @@ pub use source::SourcePyramid;
 
 use crate::error::{Error, Result};
 use crate::exemplar::Exemplar;
-use crate::guide::{self, FrameGuides};
+use crate::guide::FrameGuides;
 use crate::img::{self, Mask, Plane, Rgb};
 use nnf::{Match, Nnf, level_count};
 use patchmatch::Ctx;
@@ -95,7 +95,7 @@ impl Source {
                 format!("a step that leaves at least 2 of the exemplar's {} frames", ex.len()),
             ));
         }
-        let guides = guide::compute_sequence(&masks, &params.guide)?;
+        let guides = crate::exemplar::cache::guides(ex, &masks, &params.guide)?;
         Self::from_parts(&frames, &guides, params, params.border_width.unwrap_or(ex.meta.border_width * scale))
     }
 
