@@ -183,6 +183,20 @@ fn resolve_styles(anim: &Animation, opts: &RenderOptions) -> Result<Vec<Option<S
     Ok(out)
 }
 
+/// The thickness of a layer's target ([`crate::synth::mask_thickness`]) over up to 9 frames
+/// spread evenly over `range`.
+fn layer_thickness(anim: &Animation, region: usize, range: &Range<usize>, strokes: StrokeMode) -> Result<Option<f32>> {
+    let n = range.len();
+    let samples = n.min(9);
+    let frames: Vec<usize> =
+        (0..samples).map(|k| range.start + if samples > 1 { k * (n - 1) / (samples - 1) } else { 0 }).collect();
+    let coverages: Vec<Plane<f32>> = frames
+        .into_iter()
+        .map(|f| Ok(target_fill(&anim.render(region, f)?, strokes).map(|c| c[3])))
+        .collect::<Result<_>>()?;
+    Ok(crate::synth::mask_thickness(coverages))
+}
+
 /// Parameters for one exemplar at the render's scale.
 fn style_params(base: &Params, ex: &Exemplar, scale: f32) -> Result<Params> {
     if (scale - 1.0).abs() < 1e-6 {
@@ -238,17 +252,48 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
     names.sort();
     names.dedup();
     let exemplars: Vec<Exemplar> = names.iter().map(|n| exemplar::find(n, &search)).collect::<Result<_>>()?;
-    let styles: Vec<Style> = names
-        .iter()
-        .zip(exemplars)
-        .map(|(name, ex)| {
-            let params = style_params(&opts.params, &ex, opts.scale)?;
-            let source = Source::prepare(&ex, &params)?;
-            let pigment = Pigment::from_exemplar(&ex);
-            Ok(Style { name: name.clone(), exemplar: ex, source, pigment, params })
+    let base: Vec<Params> =
+        exemplars.iter().map(|ex| style_params(&opts.params, ex, opts.scale)).collect::<Result<_>>()?;
+    // Per layer: its exemplar and the parameters fitted to its thickness (thin layers get a
+    // smaller blur σ and border width b, see `Params::fit_to_thickness`); layers with the same
+    // exemplar and parameters share one prepared source.
+    let fitted: Vec<Option<(usize, Params)>> = (0..anim.regions.len())
+        .into_par_iter()
+        .map(|region| -> Result<Option<(usize, Params)>> {
+            let Some(e) = styles_of[region].as_ref().and_then(|n| names.iter().position(|m| m == n)) else {
+                return Ok(None);
+            };
+            let p = &base[e];
+            if !p.fit_thin() {
+                return Ok(Some((e, p.clone())));
+            }
+            let ex = &exemplars[e];
+            let exemplar_border = ex.meta.border_width * p.src_scale().unwrap_or(ex.meta.scale);
+            let thickness = layer_thickness(anim, region, &range, opts.strokes)?;
+            Ok(Some((e, thickness.map_or_else(|| p.clone(), |t| p.fit_to_thickness(t, exemplar_border)))))
         })
         .collect::<Result<_>>()?;
-    let style_index = |n: &Option<String>| n.as_ref().and_then(|n| names.iter().position(|m| m == n));
+    let mut keys: Vec<(usize, Params)> = Vec::new();
+    let region_style: Vec<Option<usize>> = fitted
+        .into_iter()
+        .map(|f| {
+            f.map(|(e, p)| {
+                keys.iter().position(|(ke, kp)| *ke == e && *kp == p).unwrap_or_else(|| {
+                    keys.push((e, p));
+                    keys.len() - 1
+                })
+            })
+        })
+        .collect();
+    let styles: Vec<Style> = keys
+        .into_iter()
+        .map(|(e, params)| {
+            let ex = exemplars[e].clone();
+            let source = Source::prepare(&ex, &params)?;
+            let pigment = Pigment::from_exemplar(&ex);
+            Ok(Style { name: names[e].clone(), exemplar: ex, source, pigment, params })
+        })
+        .collect::<Result<_>>()?;
 
     // Resume: check that there is something to continue, made with the same options, before
     // anything is created or computed.
@@ -316,7 +361,7 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
     let mut layers: Vec<Layer> = (0..anim.regions.len())
         .into_par_iter()
         .map(|region| -> Result<Layer> {
-            let style = style_index(&styles_of[region]);
+            let style = region_style[region];
             let (synth, guides) = match style {
                 // Nothing left to synthesize when every frame was done (only the GIF was missing).
                 Some(s) if done < n => {

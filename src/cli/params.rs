@@ -67,12 +67,18 @@ pub struct SynthFlags {
     /// Also optimize the finest pyramid level (slower; the thesis only votes it).
     #[arg(long)]
     pub optimize_finest: bool,
+    /// Keep σ and b as given for thin layers too (by default they are lowered to fit layers
+    /// only a few pixels thick; giving --blur-sigma or --border-width also turns this off).
+    #[arg(long)]
+    pub no_thin_fit: bool,
 }
 
 impl SynthFlags {
     /// The validated parameters.
     pub fn params(&self) -> Result<Params> {
-        let mut b: ParamsBuilder = Params::builder().seed(self.seed).optimize_finest(self.optimize_finest);
+        let fit = !self.no_thin_fit && self.blur_sigma.is_none() && self.border_width.is_none();
+        let mut b: ParamsBuilder =
+            Params::builder().seed(self.seed).optimize_finest(self.optimize_finest).fit_thin_layers(fit);
         if let Some(v) = self.dist_weight {
             b = b.w_df(v);
         }

@@ -71,6 +71,28 @@ impl std::fmt::Debug for Source {
     }
 }
 
+/// The thickness of a target, for [`Params::fit_to_thickness`]: the median over the given
+/// coverage frames of the mask's largest inscribed radius (the largest distance from the
+/// outside among the pixels of coverage ≥ ½), pixels. Empty frames are skipped; `None` when all
+/// are empty.
+pub fn mask_thickness(coverages: impl IntoIterator<Item = Plane<f32>>) -> Option<f32> {
+    let mut radii: Vec<f32> = coverages
+        .into_iter()
+        .filter_map(|c| {
+            let m = c.map(|v| v >= 0.5);
+            if m.data().iter().all(|&b| !b) {
+                return None;
+            }
+            Some(crate::guide::sdf(&m).data().iter().copied().fold(0.0, f32::max))
+        })
+        .collect();
+    if radii.is_empty() {
+        return None;
+    }
+    radii.sort_by(f32::total_cmp);
+    Some(radii[radii.len() / 2])
+}
+
 /// Resamples exemplar frames: every `speed`-th frame, scaled by `scale`.
 pub fn resample_exemplar(ex: &Exemplar, scale: f32, speed: usize) -> (Vec<Plane<Rgb>>, Vec<Plane<f32>>) {
     let (w, h) = (ex.width(), ex.height());

@@ -37,6 +37,7 @@ pub struct Params {
     pub(crate) ext_clamp: bool,
     pub(crate) seed: u64,
     pub(crate) guide: GuideParams,
+    pub(crate) fit_thin: bool,
 }
 
 impl Default for Params {
@@ -65,6 +66,7 @@ impl Default for Params {
             ext_clamp: true,
             seed: 1,
             guide: GuideParams::default(),
+            fit_thin: true,
         }
     }
 }
@@ -112,6 +114,42 @@ impl Params {
     pub fn seed(&self) -> u64 {
         self.seed
     }
+    /// Whether σ and b are lowered for layers thinner than they suit ([`Params::fit_to_thickness`]).
+    pub fn fit_thin(&self) -> bool {
+        self.fit_thin
+    }
+
+    /// These parameters fitted to a target whose parts are `thickness` pixels thick (the
+    /// inscribed radius, see [`mask_thickness`](super::mask_thickness)), for an exemplar whose
+    /// border width is `exemplar_border` pixels (at the exemplar's scale in use).
+    ///
+    /// The thesis's σ = 8 and b ≈ 10–30 px suit shapes tens of pixels thick (the `horse`, 1000 ×
+    /// 800). A part only ~15 px wide is closed up and merged with its neighbours by that blur and
+    /// lies entirely within the border band, so it gets only the exemplar's pale rim texture —
+    /// thin limbs, scarves and strokes all but vanish. Here σ ≤ thickness / 2.5 and
+    /// b ≤ thickness / 1.5, so a thin part keeps its shape and has an interior of its own; thick
+    /// targets are unchanged. Off when [`ParamsBuilder::fit_thin_layers`] is false.
+    pub fn fit_to_thickness(&self, thickness: f32, exemplar_border: f32) -> Params {
+        let mut p = self.clone();
+        if !(self.fit_thin && thickness.is_finite() && thickness > 0.0) {
+            return p;
+        }
+        // Rounded to half pixels, so layers of similar thickness share one prepared exemplar.
+        let half = |v: f32| ((v * 2.0).floor() / 2.0).max(0.5);
+        let sigma = half(thickness / 2.5);
+        if sigma < p.guide.blur_sigma {
+            p.guide.blur_sigma = sigma;
+        }
+        // Not below 4 px: the rims of paint are ~2–4 px wide, and a border band narrower than
+        // the rim would count rim pixels as interior (darker interiors).
+        let b = half(thickness / 1.5).max(4.0);
+        let current = p.border_width.unwrap_or(exemplar_border);
+        if b < current {
+            p.border_width = Some(b);
+        }
+        p
+    }
+
     /// Target scale.
     pub fn target_scale(&self) -> f32 {
         self.target_scale
@@ -313,6 +351,12 @@ impl ParamsBuilder {
         self
     }
 
+    /// Lower σ and b for thin layers ([`Params::fit_to_thickness`]). Default: true.
+    pub fn fit_thin_layers(mut self, on: bool) -> Self {
+        self.p.fit_thin = on;
+        self
+    }
+
     /// σ of the spatial mask blur (thesis `--blur-sigma`), pixels. Default: 8.
     pub fn blur_sigma(mut self, s: f32) -> Self {
         self.p.guide.blur_sigma = s;
@@ -404,6 +448,27 @@ impl ParamsBuilder {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn thin_targets_get_a_smaller_blur_and_border() {
+        let p = Params::default();
+        // Thick targets keep the thesis's values.
+        assert_eq!(p.fit_to_thickness(60.0, 12.0), p);
+        let thin = p.fit_to_thickness(7.5, 12.0);
+        assert_eq!(thin.guide().blur_sigma, 3.0);
+        assert_eq!(thin.border_width(), Some(5.0));
+        assert!(thin.fit_to_thickness(7.5, 12.0) == thin);
+        // Switched off, or a target of unknown thickness: unchanged.
+        let off = Params::builder().fit_thin_layers(false).build().unwrap();
+        assert_eq!(off.fit_to_thickness(7.5, 12.0), off);
+        assert_eq!(p.fit_to_thickness(f32::NAN, 12.0), p);
+        // A bar 15 px wide is 7.5 px thick; empty frames do not count.
+        let bar = crate::img::Plane::from_fn(64, 64, |x, _| if (20..35).contains(&x) { 1.0 } else { 0.0 });
+        let empty = crate::img::Plane::filled(64, 64, 0.0f32);
+        let t = super::super::mask_thickness([bar.clone(), empty.clone(), bar]).unwrap();
+        assert!((t - 7.5).abs() <= 1.0, "{t}");
+        assert_eq!(super::super::mask_thickness([empty]), None);
+    }
 
     #[test]
     fn defaults_validate_and_bad_values_are_named() {
