@@ -185,7 +185,7 @@ fn check(file: usize, muts: &[Mutation], damage: u8, at: u32) {
     let Ok(model) = lottie::parse(path, &text) else { return };
     // Small renders keep the run fast; the geometry code runs all the same.
     let scale = 48.0 / model.width.max(model.height).max(1.0);
-    let opts = LoadOptions { scale, split_precomps: file % 2 == 0 };
+    let opts = LoadOptions { scale, split_precomps: file.is_multiple_of(2) };
     let Ok(anim) = lottie::from_model(path, model, &opts) else { return };
     for r in 0..anim.regions.len().min(6) {
         for f in [0, anim.frames / 2, anim.frames.saturating_sub(1)] {

@@ -189,7 +189,7 @@ mod tests {
             for _ in 0..4 {
                 let m = Plane::from_fn(w, h, |_, _| {
                     state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                    (state >> 33) % 3 == 0
+                    (state >> 33).is_multiple_of(3)
                 });
                 let a = signed_distance(&m);
                 let b = brute(&m);

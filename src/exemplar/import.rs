@@ -91,14 +91,14 @@ pub fn import(src: &Path, opts: &ImportOptions, progress: &dyn Progress) -> Resu
     let mut frames = Vec::with_capacity(files.len());
     for (i, f) in files.iter().enumerate() {
         let frame = prepare(img::load_rgb(f)?, f, opts)?;
-        if let Some(first) = frames.first().map(|p: &Plane<Rgb>| p.size()) {
-            if first != frame.size() {
-                return Err(Error::SizeMismatch {
-                    path: f.clone(),
-                    expected: (first.0 as u32, first.1 as u32),
-                    found: (frame.width() as u32, frame.height() as u32),
-                });
-            }
+        if let Some(first) = frames.first().map(|p: &Plane<Rgb>| p.size())
+            && first != frame.size()
+        {
+            return Err(Error::SizeMismatch {
+                path: f.clone(),
+                expected: (first.0 as u32, first.1 as u32),
+                found: (frame.width() as u32, frame.height() as u32),
+            });
         }
         frames.push(frame);
         if !progress.update("reading", i + 1, files.len()) {

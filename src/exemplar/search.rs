@@ -154,10 +154,10 @@ pub fn find(name_or_path: &str, search: &SearchPath) -> Result<Exemplar> {
             return Exemplar::load(&cand);
         }
     }
-    if search.bundled {
-        if let Some(b) = bundled::get(name_or_path) {
-            return b.load();
-        }
+    if search.bundled
+        && let Some(b) = bundled::get(name_or_path)
+    {
+        return b.load();
     }
     let mut available: Vec<String> = list(search).into_iter().filter(|i| !i.shadowed).map(|i| i.name).collect();
     available.sort();

@@ -270,7 +270,7 @@ pub(crate) fn refresh_errors(ctx: &Ctx, nnf: &mut Nnf) {
 pub(crate) fn sweep(ctx: &Ctx, nnf: &mut Nnf, iter: usize) -> Stats {
     let (w, h) = (nnf.w, nnf.h);
     let snapshot = nnf.data.clone();
-    let forward = iter % 2 == 0;
+    let forward = iter.is_multiple_of(2);
     let step: isize = if forward { 1 } else { -1 };
     let active: Vec<bool> = ctx.tgt.info.iter().map(|i| i.flags & VALID != 0).collect();
     let stats: Vec<Stats> = nnf
