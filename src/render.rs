@@ -183,20 +183,6 @@ fn resolve_styles(anim: &Animation, opts: &RenderOptions) -> Result<Vec<Option<S
     Ok(out)
 }
 
-/// The thickness of a layer's target ([`crate::synth::mask_thickness`]) over up to 9 frames
-/// spread evenly over `range`.
-fn layer_thickness(anim: &Animation, region: usize, range: &Range<usize>, strokes: StrokeMode) -> Result<Option<f32>> {
-    let n = range.len();
-    let samples = n.min(9);
-    let frames: Vec<usize> =
-        (0..samples).map(|k| range.start + if samples > 1 { k * (n - 1) / (samples - 1) } else { 0 }).collect();
-    let coverages: Vec<Plane<f32>> = frames
-        .into_iter()
-        .map(|f| Ok(target_fill(&anim.render(region, f)?, strokes).map(|c| c[3])))
-        .collect::<Result<_>>()?;
-    Ok(crate::synth::mask_thickness(coverages))
-}
-
 /// Parameters for one exemplar at the render's scale.
 fn style_params(base: &Params, ex: &Exemplar, scale: f32) -> Result<Params> {
     if (scale - 1.0).abs() < 1e-6 {
@@ -268,8 +254,10 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
                 return Ok(Some((e, p.clone())));
             }
             let ex = &exemplars[e];
-            let exemplar_border = ex.meta.border_width * p.src_scale().unwrap_or(ex.meta.scale);
-            let thickness = layer_thickness(anim, region, &range, opts.strokes)?;
+            let exemplar_border = p.exemplar_border_width(ex);
+            let thickness = crate::synth::sequence_thickness(range.len(), |k| {
+                Ok(target_fill(&anim.render(region, range.start + k)?, opts.strokes).map(|c| c[3]))
+            })?;
             Ok(Some((e, thickness.map_or_else(|| p.clone(), |t| p.fit_to_thickness(t, exemplar_border)))))
         })
         .collect::<Result<_>>()?;

@@ -51,15 +51,10 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
             .with_context(|| format!("could not create the output directory '{}'", dir.display()))?;
     }
     let bars = Bars::new(ctx.quiet, anim.frames as u64);
-    // σ and b fitted to the target's thickness (up to 9 masks spread over the sequence).
+    // σ and b fitted to the target's thickness.
     let params = if params.fit_thin() {
-        let n = anim.frames;
-        let samples = n.min(9);
-        let coverages = (0..samples)
-            .map(|k| anim.render(0, if samples > 1 { k * (n - 1) / (samples - 1) } else { 0 }).map(|r| r.coverage()))
-            .collect::<fluidymation::Result<Vec<_>>>()?;
-        let b = exemplar.meta.border_width * params.src_scale().unwrap_or(exemplar.meta.scale);
-        match fluidymation::synth::mask_thickness(coverages) {
+        let b = params.exemplar_border_width(&exemplar);
+        match fluidymation::synth::sequence_thickness(anim.frames, |k| Ok(anim.render(0, k)?.coverage()))? {
             Some(t) => params.fit_to_thickness(t, b),
             None => params,
         }

@@ -93,6 +93,14 @@ pub fn mask_thickness(coverages: impl IntoIterator<Item = Plane<f32>>) -> Option
     Some(radii[radii.len() / 2])
 }
 
+/// [`mask_thickness`] of a sequence of `frames` frames from up to 9 of them spread evenly
+/// over it (the first and the last included); `coverage(k)` gives frame k's coverage.
+pub fn sequence_thickness(frames: usize, mut coverage: impl FnMut(usize) -> Result<Plane<f32>>) -> Result<Option<f32>> {
+    let samples = frames.min(9);
+    let picked = (0..samples).map(|k| if samples > 1 { k * (frames - 1) / (samples - 1) } else { 0 });
+    Ok(mask_thickness(picked.map(&mut coverage).collect::<Result<Vec<_>>>()?))
+}
+
 /// Resamples exemplar frames: every `speed`-th frame, scaled by `scale`.
 pub fn resample_exemplar(ex: &Exemplar, scale: f32, speed: usize) -> (Vec<Plane<Rgb>>, Vec<Plane<f32>>) {
     let (w, h) = (ex.width(), ex.height());
@@ -118,7 +126,7 @@ impl Source {
             ));
         }
         let guides = crate::exemplar::cache::guides(ex, &masks, &params.guide)?;
-        Self::from_parts(&frames, &guides, params, params.border_width.unwrap_or(ex.meta.border_width * scale))
+        Self::from_parts(&frames, &guides, params, params.border_width.unwrap_or(params.exemplar_border_width(ex)))
     }
 
     /// Prepares a source from frames and precomputed guides.

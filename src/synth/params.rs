@@ -119,6 +119,12 @@ impl Params {
         self.fit_thin
     }
 
+    /// The exemplar's recommended border width at the exemplar scale in use (`--src-scale`, else
+    /// its own), pixels: what b is when [`Params::border_width`] is not set.
+    pub fn exemplar_border_width(&self, ex: &crate::exemplar::Exemplar) -> f32 {
+        ex.meta.border_width * self.src_scale.unwrap_or(ex.meta.scale)
+    }
+
     /// These parameters fitted to a target whose parts are `thickness` pixels thick (the
     /// inscribed radius, see [`mask_thickness`](super::mask_thickness)), for an exemplar whose
     /// border width is `exemplar_border` pixels (at the exemplar's scale in use).
