@@ -2,11 +2,11 @@
 //!
 //! For every target frame j, in order, a coarse-to-fine pyramid of EM iterations finds a
 //! nearest-neighbour field into the whole exemplar sequence — frame i, sub-pixel position,
-//! rotation θ — that minimizes the guided patch error D ([`patch`]), and votes the frame's
-//! colors from it ([`vote`]). Temporal coherence comes from the previous frame's field,
-//! shifted along the exemplar's own time axis ([`shift`]), which both initializes the search
+//! rotation θ — that minimizes the guided patch error D (module `patch`), and votes the frame's
+//! colors from it (module `vote`). Temporal coherence comes from the previous frame's field,
+//! shifted along the exemplar's own time axis (module `shift`), which both initializes the search
 //! and votes the temporal guide `T^prev`. A 3D occurrence map keeps the use of exemplar
-//! patches uniform ([`occurrence`]).
+//! patches uniform (module `occurrence`).
 //!
 //! ```no_run
 //! use fluidymation::{exemplar::Exemplar, guide, synth::{Params, Source, Synthesizer}};

@@ -1,5 +1,5 @@
 //! The resolved Lottie model: layers, transforms and shapes with [`Value`]s, built from the
-//! [`schema`](super::schema) once at load time. Nothing here knows JSON keys any more; every
+//! [`schema`] once at load time. Nothing here knows JSON keys any more; every
 //! unsupported or malformed thing became a warning naming the feature and the layer.
 
 use super::geom::Bez;
