@@ -271,7 +271,9 @@ fn write_sheet(ex: &Exemplar, out: &Path, columns: usize, cell: usize) -> anyhow
 }
 
 /// Where a new exemplar called `name` goes.
-fn target_dir(output: Option<PathBuf>, name: &str, search: &SearchPath) -> anyhow::Result<PathBuf> {
+/// The folder a new exemplar NAME is written to: `output/NAME`, else in the user's exemplar
+/// folder; an existing one is an error unless `force`.
+fn target_dir(output: Option<PathBuf>, name: &str, force: bool, search: &SearchPath) -> anyhow::Result<PathBuf> {
     exemplar::validate_name(name)?;
     let parent = match output {
         Some(o) => o,
@@ -280,7 +282,11 @@ fn target_dir(output: Option<PathBuf>, name: &str, search: &SearchPath) -> anyho
             .map(Path::to_path_buf)
             .context("no user exemplar folder (HOME is not set); pass -o DIR")?,
     };
-    Ok(parent.join(name))
+    let dir = parent.join(name);
+    if dir.exists() && !force {
+        bail!("'{}' already exists; pass --force to replace it or choose another --name", dir.display());
+    }
+    Ok(dir)
 }
 
 /// An indicatif bar on stderr when it is a terminal and not `--quiet`.
@@ -325,10 +331,7 @@ impl Drop for Bar {
 }
 
 fn generate(a: GenerateArgs, search: &SearchPath, ctx: &Ctx) -> anyhow::Result<()> {
-    let dir = target_dir(a.output, &a.name, search)?;
-    if dir.exists() && !a.force {
-        bail!("'{}' already exists; pass --force to replace it or choose another --name", dir.display());
-    }
+    let dir = target_dir(a.output, &a.name, a.force, search)?;
     let params = GeneratorParams::default()
         .size(a.size.0, a.size.1)
         .frames(a.frames)
@@ -371,10 +374,7 @@ fn generate(a: GenerateArgs, search: &SearchPath, ctx: &Ctx) -> anyhow::Result<(
 }
 
 fn import(a: ImportArgs, search: &SearchPath, ctx: &Ctx) -> anyhow::Result<()> {
-    let dir = target_dir(a.output, &a.name, search)?;
-    if dir.exists() && !a.force {
-        bail!("'{}' already exists; pass --force to replace it or choose another --name", dir.display());
-    }
+    let dir = target_dir(a.output, &a.name, a.force, search)?;
     let opts = ImportOptions {
         name: a.name.clone(),
         crop: a.crop,

@@ -365,24 +365,12 @@ fn remove_small(m: &mut [bool], w: usize, h: usize, min_area: usize, value: bool
             head += 1;
             let (x, y) = (i % w, i / w);
             touches_edge |= x == 0 || y == 0 || x == w - 1 || y == h - 1;
-            let mut visit = |j: usize| {
+            crate::img::for_each_neighbour4(i, w, h, |j| {
                 if !seen[j] && m[j] == value {
                     seen[j] = true;
                     comp.push(j);
                 }
-            };
-            if x > 0 {
-                visit(i - 1);
-            }
-            if x + 1 < w {
-                visit(i + 1);
-            }
-            if y > 0 {
-                visit(i - w);
-            }
-            if y + 1 < h {
-                visit(i + w);
-            }
+            });
         }
         let keep = comp.len() >= min_area || (!value && touches_edge);
         if !keep {

@@ -277,25 +277,12 @@ fn label_components(mask: &FrameMask) -> (Vec<u32>, usize) {
         labels[start] = n;
         stack.push(start);
         while let Some(i) = stack.pop() {
-            let (x, y) = (i % rw, i / rw);
-            let mut visit = |j: usize| {
+            crate::img::for_each_neighbour4(i, rw, rh, |j| {
                 if inside(j) && labels[j] == u32::MAX {
                     labels[j] = n;
                     stack.push(j);
                 }
-            };
-            if x > 0 {
-                visit(i - 1);
-            }
-            if x + 1 < rw {
-                visit(i + 1);
-            }
-            if y > 0 {
-                visit(i - rw);
-            }
-            if y + 1 < rh {
-                visit(i + rw);
-            }
+            });
         }
         n += 1;
     }

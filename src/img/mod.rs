@@ -31,6 +31,25 @@ pub struct Plane<T> {
 /// A binary mask: `true` where the medium (paint) is present.
 pub type Mask = Plane<bool>;
 
+/// Calls `f` with the row-major index of each 4-connected neighbour of pixel `i` in a
+/// `w`-wide, `h`-high image: left, right, up, down (those inside the image).
+#[inline]
+pub fn for_each_neighbour4(i: usize, w: usize, h: usize, mut f: impl FnMut(usize)) {
+    let (x, y) = (i % w, i / w);
+    if x > 0 {
+        f(i - 1);
+    }
+    if x + 1 < w {
+        f(i + 1);
+    }
+    if y > 0 {
+        f(i - w);
+    }
+    if y + 1 < h {
+        f(i + w);
+    }
+}
+
 impl<T: Copy + Default> Plane<T> {
     /// A `width × height` plane filled with `T::default()`.
     pub fn new(width: usize, height: usize) -> Self {

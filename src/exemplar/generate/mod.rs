@@ -377,25 +377,12 @@ fn fill_holes(mask: &mut [bool], w: usize, h: usize) {
         outside[i] = true;
     }
     while let Some(i) = stack.pop() {
-        let (x, y) = (i % w, i / w);
-        let mut visit = |j: usize| {
+        crate::img::for_each_neighbour4(i, w, h, |j| {
             if !mask[j] && !outside[j] {
                 outside[j] = true;
                 stack.push(j);
             }
-        };
-        if x > 0 {
-            visit(i - 1);
-        }
-        if x + 1 < w {
-            visit(i + 1);
-        }
-        if y > 0 {
-            visit(i - w);
-        }
-        if y + 1 < h {
-            visit(i + w);
-        }
+        });
     }
     for (m, o) in mask.iter_mut().zip(&outside) {
         *m = !o;
