@@ -387,7 +387,6 @@ impl Synthesizer {
             } else {
                 None
             };
-            let no_omega = vec![0.0f32; sl.feat.len()];
             let finest_vote_only = l == 0 && levels > 1 && !p.optimize_finest;
             // Initialization.
             let mut field = match nnf.take() {
@@ -395,7 +394,7 @@ impl Synthesizer {
                     let mut f = prev_down.clone().unwrap_or_else(|| Nnf::new(lw, lh));
                     let had_prev = prev_down.is_some();
                     sanitize(&mut f, sl, &tgt);
-                    let ctx = Ctx { src: sl, tgt: &tgt, omega: &no_omega, w_col: 1.0, params: p, keys: keys(u64::MAX) };
+                    let ctx = Ctx::new(sl, &tgt, None, 1.0, p, keys(u64::MAX));
                     fill_holes(&ctx, &mut f);
                     if !had_prev {
                         // First frame: random field, then one guide-only PatchMatch pass (thesis §4.2).
@@ -409,9 +408,7 @@ impl Synthesizer {
                     let mut up = coarse.upscale(lw, lh);
                     sanitize(&mut up, sl, &tgt);
                     if !finest_vote_only {
-                        let ctx =
-                            Ctx { src: sl, tgt: &tgt, omega: &no_omega, w_col: 1.0, params: p, keys: keys(u64::MAX) };
-                        fill_holes(&ctx, &mut up);
+                        fill_holes(&Ctx::new(sl, &tgt, None, 1.0, p, keys(u64::MAX)), &mut up);
                     }
                     if let Some(mut pd) = prev_down.clone() {
                         if !finest_vote_only {
@@ -422,11 +419,11 @@ impl Synthesizer {
                         let voted = timed(&mut st.vote, || vote::vote(sl, &up, paper, p.vote_sigma));
                         write_lanes(&mut tgt, &voted, true);
                         let omega = if finest_vote_only {
-                            no_omega.clone()
+                            None
                         } else {
                             timed(&mut st.occurrence, || occurrence::penalty(sl, &up, &tgt, p.occ_radius, p.lambda))
                         };
-                        let ctx = Ctx { src: sl, tgt: &tgt, omega: &omega, w_col: p.w_color, params: p, keys: keys(0) };
+                        let ctx = Ctx::new(sl, &tgt, omega.as_ref(), p.w_color, p, keys(0));
                         timed(&mut st.init, || merge(&ctx, &mut up, &pd));
                         evaluations += 2 * tgt.active.len() as u64;
                     }
@@ -440,14 +437,7 @@ impl Synthesizer {
                     for it in 0..p.pm_iters_at(from_coarsest) {
                         let omega =
                             timed(&mut st.occurrence, || occurrence::penalty(sl, &field, &tgt, p.occ_radius, p.lambda));
-                        let ctx = Ctx {
-                            src: sl,
-                            tgt: &tgt,
-                            omega: &omega,
-                            w_col: p.w_color,
-                            params: p,
-                            keys: keys(opt as u64),
-                        };
+                        let ctx = Ctx::new(sl, &tgt, omega.as_ref(), p.w_color, p, keys(opt as u64));
                         timed(&mut st.refresh, || patchmatch::refresh_errors(&ctx, &mut field));
                         energy.push((l, mean_err(&field)));
                         evaluations += tgt.active.len() as u64;
@@ -643,8 +633,9 @@ fn merge(ctx: &Ctx, up: &mut Nnf, prev: &Nnf) {
             if !pm.ok {
                 continue;
             }
-            let eu = ctx.error_of(q, m);
-            let ep = ctx.error_of(q, pm);
+            let win = ctx.window(q);
+            let eu = ctx.error_in(&win, m);
+            let ep = ctx.error_in(&win, pm);
             if ep < eu {
                 *m = Match { err: ep, ..*pm };
             } else {

@@ -8,7 +8,7 @@
 
 use super::nnf::{Nnf, offsets};
 use super::params::PATCH;
-use super::source::{IN_MASK, INTERIOR, PAD, SourceLevel, floor_i32};
+use super::source::{FLAG_LANE, Feat, IN_MASK, INTERIOR, OMEGA_LANE, PAD, SourceLevel, floor_i32};
 use super::target::TargetLevel;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicI32, Ordering};
@@ -57,27 +57,53 @@ pub(crate) fn counts(src: &SourceLevel, nnf: &Nnf, tgt: &TargetLevel, r: usize) 
     out
 }
 
-/// The penalty `λ·Ω*(p′)/(n²·ω*_seg)` per source voxel (padded layout), where the segment is
-/// the voxel's own (matches never cross segments).
-pub(crate) fn penalty(src: &SourceLevel, nnf: &Nnf, tgt: &TargetLevel, r: usize, lambda: f32) -> Vec<f32> {
+/// Penalties above this many times λ/n² (the per-tap penalty of a voxel used exactly as often
+/// as uniform use would, Ω* = ω*) are clamped when stored in the features' occurrence lane.
+pub(crate) const OMEGA_CAP: f32 = 32.0;
+
+/// The exemplar features of this level with the penalty `λ·Ω*(p′)/(n²·ω*_seg)` of each source
+/// voxel written into the occurrence lane ([`OMEGA_LANE`]), where the segment is the voxel's own
+/// (matches never cross segments), and the lane's weight `w_Ω`. `None` when λ = 0.
+///
+/// The lane holds `q = round(√(penalty / w_Ω))` with `w_Ω = OMEGA_CAP·λ/n² / 255²`, so that the
+/// patch error's `w_Ω·(q − 0)²` is the penalty: uniform use (Ω* = ω*) gives q ≈ 45, a step of
+/// ≈ 4 % there and finer below; penalties above [`OMEGA_CAP`] times that are clamped.
+/// Keeping Ω in the 8-byte pixel the error reads anyway halves the cache lines a random
+/// candidate touches (the search is bound by them, not by arithmetic).
+pub(crate) fn penalty(
+    src: &SourceLevel,
+    nnf: &Nnf,
+    tgt: &TargetLevel,
+    r: usize,
+    lambda: f32,
+) -> Option<(Vec<Feat>, f32)> {
     if lambda == 0.0 {
-        return vec![0.0; src.feat.len()];
+        return None;
     }
     let counts = counts(src, nnf, tgt, r);
     let n2 = (PATCH * PATCH) as f32;
-    let scale: [f32; 2] = std::array::from_fn(|seg| {
+    let w_omega = OMEGA_CAP * lambda / n2 / (255.0 * 255.0);
+    // (q/255)² = penalty/(OMEGA_CAP·λ/n²) = Ω*/(OMEGA_CAP·ω*), so q = 255·√(Ω* · k_seg).
+    let k: [f32; 2] = std::array::from_fn(|seg| {
         let t = tgt.seg_count[seg] as f32;
         let s = src.seg_count[seg] as f32;
         if t > 0.0 && s > 0.0 {
-            // Ω*/(n²ω*) with ω* = n²(2r+1)|T|/|S|
-            lambda * s / (n2 * n2 * (2 * r + 1) as f32 * t)
+            // 1/(OMEGA_CAP·ω*) with ω* = n²(2r+1)|T|/|S|
+            s / (OMEGA_CAP * n2 * (2 * r + 1) as f32 * t)
         } else {
             0.0
         }
     });
-    counts
-        .par_iter()
-        .zip(src.info.par_iter())
-        .map(|(&c, info)| if c == 0 { 0.0 } else { c as f32 * scale[(info.flags & INTERIOR != 0) as usize] })
-        .collect()
+    let mut feat = src.feat.clone();
+    feat.par_chunks_mut(src.frame_len).zip(counts.par_chunks(src.frame_len)).for_each(|(fr, cr)| {
+        for (f, &c) in fr.iter_mut().zip(cr) {
+            f[OMEGA_LANE] = if c <= 0 {
+                0
+            } else {
+                let seg = (f[FLAG_LANE] & INTERIOR != 0) as usize;
+                (255.0 * (c as f32 * k[seg]).sqrt()).round().min(255.0) as u8
+            };
+        }
+    });
+    Some((feat, w_omega))
 }

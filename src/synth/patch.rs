@@ -7,7 +7,9 @@
 //! ```
 //!
 //! where p′ runs over the window around the sub-pixel source center rotated by θ, and ext±
-//! are swapped when the rotated flows oppose. In this search metric each rotated tap reads the
+//! are swapped when the rotated flows oppose. The occurrence penalty rides in the pixel's
+//! eighth lane as `√(penalty/w_Ω)` against a target lane of 0, so it is one more weighted
+//! squared difference ([`super::occurrence::penalty`]). In this search metric each rotated tap reads the
 //! nearest exemplar pixel (at most ½ px away); voting, which makes the output, samples the
 //! rotated windows bilinearly at their exact sub-pixel positions ([`super::vote`]). The direction term
 //! `w_dir·|tan(…)|` is dropped as in the thesis's implementation (§4.4.1): the θ rule already
@@ -17,8 +19,8 @@
 //! checks in the inner loop (centers are validated: every tap stays inside the padded
 //! frame), 8-lane pixels that vectorize, and a runtime-dispatched AVX2 build of the same code.
 
-use super::params::HALF;
-use super::source::{LANES, PAD, SourceLevel};
+use super::params::{HALF, PATCH};
+use super::source::{Feat, LANES, OMEGA_LANE, PAD, SourceLevel};
 use super::target::TargetLevel;
 
 /// Everything about one evaluation except the candidate itself.
@@ -30,23 +32,75 @@ pub(crate) struct Query {
     pub w_col: f32,
     /// m(q)·w_prev.
     pub mw: f32,
+    /// Weight w_Ω of the occurrence lane (0 where the features carry no Ω).
+    pub w_om: f32,
 }
 
-/// Per-level occurrence penalty `λ·Ω*(p′)/(n²·ω*_seg)`, in the padded source layout.
-pub(crate) type OmegaMap = [f32];
+/// The target side of D for one target pixel q, gathered once and reused by every candidate
+/// tried for q: the two color terms against `T^rgb` and `T^prev` folded into one,
+///
+/// ```text
+/// a·(v − t)² + b·(v − p)² = (a + b)·(v − m)² + a·b/(a + b)·(t − p)²,   m = t + b/(a + b)·(p − t),
+/// ```
+///
+/// whose second part does not depend on the candidate (`base`), so a tap costs one weighted
+/// squared difference of 8 lanes read from this small block instead of two from the strided
+/// target (a = w_col·w_rgb, b = m(q)·w_prev·w_rgb; b/(a + b) is the same for the three color
+/// lanes).
+#[derive(Clone, Debug)]
+pub(crate) struct Window {
+    /// m(q′) per tap (row-major over the n × n window), in quantization units.
+    taps: [[f32; LANES]; PATCH * PATCH],
+    /// Per-lane weights: `[(w_col + m(q)·w_prev)·w_rgb, w_df, w_ext, w_ext, 0, w_Ω]`.
+    w: [f32; LANES],
+    /// The candidate-independent part of the temporal term, Σ a·b/(a + b)·(t − p)².
+    base: f32,
+}
 
-/// D for source center (cx, cy) of frame `i` with rotation M = (c, s); returns a value
-/// `> best` (possibly partial) once the running sum exceeds `best`.
+impl Window {
+    /// Gathers the window of target pixel `q.tq`.
+    pub fn new(src: &SourceLevel, tgt: &TargetLevel, q: &Query) -> Window {
+        let lw = &src.lane_w;
+        let mw = q.mw.max(0.0);
+        let sum = q.w_col + mw;
+        // b/(a + b) and a·b/(a + b) per lane (zero but for the color lanes).
+        let (beta, gamma) = if mw > 0.0 && sum > 0.0 { (mw / sum, q.w_col * mw / sum) } else { (0.0, 0.0) };
+        let beta = [beta, beta, beta, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let gamma: [f32; LANES] = std::array::from_fn(|k| if k < 3 { gamma * lw[k] } else { 0.0 });
+        let mut w = [sum * lw[0], sum * lw[1], sum * lw[2], lw[3], lw[4], lw[5], 0.0, 0.0];
+        w[OMEGA_LANE] = q.w_om;
+        let mut taps = [[0.0f32; LANES]; PATCH * PATCH];
+        let mut base = [0.0f32; LANES];
+        let top = q.tq - HALF - HALF * tgt.stride;
+        for row in 0..PATCH {
+            let at = top + row * tgt.stride;
+            let (cur, prev) = (&tgt.cur[at..at + PATCH], &tgt.prev[at..at + PATCH]);
+            for ((m, t), p) in taps[row * PATCH..(row + 1) * PATCH].iter_mut().zip(cur).zip(prev) {
+                for k in 0..LANES {
+                    let d = p[k] - t[k];
+                    m[k] = t[k] + beta[k] * d;
+                    base[k] += gamma[k] * d * d;
+                }
+            }
+        }
+        Window { taps, w, base: base.iter().sum() }
+    }
+}
+
+/// D for source center (cx, cy) of frame `i` with rotation M = (c, s) against target window
+/// `win`, reading the exemplar pixels from `feat` (the level's features, or a copy with the
+/// occurrence lane filled); returns a value `> best` (possibly partial) once the running sum
+/// exceeds `best`. `flip` compares ext± swapped.
 ///
 /// The caller guarantees that the center's nearest pixel is a valid center (≥ `MARGIN` px from
-/// the border), so every tap lies inside the padded frame.
+/// the border), so every tap lies inside the padded frame, and that `feat` has the level's
+/// layout.
 #[inline]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn patch_error(
     src: &SourceLevel,
-    omega: &OmegaMap,
-    tgt: &TargetLevel,
-    q: Query,
+    feat: &[Feat],
+    win: &Window,
     i: usize,
     cx: f32,
     cy: f32,
@@ -57,14 +111,15 @@ pub(crate) fn patch_error(
 ) -> f32 {
     debug_assert!(cx > -0.5 + super::source::MARGIN as f32 - 0.51 && cy > -0.5 + super::source::MARGIN as f32 - 0.51);
     debug_assert!(cx < (src.w - super::source::MARGIN) as f32 && cy < (src.h - super::source::MARGIN) as f32);
+    debug_assert_eq!(feat.len(), src.feat.len());
     #[cfg(target_arch = "x86_64")]
     {
         if has_avx2() {
             // SAFETY: the CPU supports AVX2 (checked above); the body is the same safe code.
-            return unsafe { patch_error_avx2(src, omega, tgt, q, i, cx, cy, c, s, flip, best) };
+            return unsafe { patch_error_avx2(src, feat, win, i, cx, cy, c, s, flip, best) };
         }
     }
-    patch_error_generic(src, omega, tgt, q, i, cx, cy, c, s, flip, best)
+    patch_error_generic(src, feat, win, i, cx, cy, c, s, flip, best)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -83,14 +138,35 @@ fn has_avx2() -> bool {
     }
 }
 
+/// Padded source index of the tap nearest to (sx, sy) (padded coordinates) in the frame
+/// starting at `fbase`.
+///
+/// # Safety
+/// `sx` and `sy` are finite, ≥ 0 and inside the padded frame (the validity rule).
+#[inline(always)]
+unsafe fn tap_index(fbase: usize, stride: i32, sx: f32, sy: f32) -> usize {
+    // Truncation is floor since padded coordinates are positive, so no saturating conversion
+    // is needed; 32-bit products (a padded frame is far below 2³¹ pixels).
+    // SAFETY: the caller's contract.
+    let (x0, y0) = unsafe { ((sx + 0.5).to_int_unchecked::<i32>(), (sy + 0.5).to_int_unchecked::<i32>()) };
+    fbase + (y0 * stride + x0) as usize
+}
+
+/// The horizontal sum of 8 lanes in a fixed tree order, `((a0+a4)+(a2+a6)) + ((a1+a5)+(a3+a7))`,
+/// which the AVX2 build computes the same way.
+#[inline(always)]
+fn tree_sum(a: &[f32; LANES]) -> f32 {
+    let s: [f32; 4] = std::array::from_fn(|k| a[k] + a[k + 4]);
+    (s[0] + s[2]) + (s[1] + s[3])
+}
+
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[allow(clippy::too_many_arguments)]
 unsafe fn patch_error_avx2(
     src: &SourceLevel,
-    omega: &OmegaMap,
-    tgt: &TargetLevel,
-    q: Query,
+    feat: &[Feat],
+    win: &Window,
     i: usize,
     cx: f32,
     cy: f32,
@@ -100,73 +176,59 @@ unsafe fn patch_error_avx2(
     best: f32,
 ) -> f32 {
     use std::arch::x86_64::*;
-    let feat = src.feat.as_ptr();
-    let stride = src.stride;
+    let fp = feat.as_ptr();
+    let stride = src.stride as i32;
     let fbase = i * src.frame_len;
-    let lw = &src.lane_w;
-    let wc = _mm256_setr_ps(q.w_col * lw[0], q.w_col * lw[1], q.w_col * lw[2], lw[3], lw[4], lw[5], 0.0, 0.0);
-    let wp = _mm256_setr_ps(q.mw * lw[0], q.mw * lw[1], q.mw * lw[2], 0.0, 0.0, 0.0, 0.0, 0.0);
-    let swap = _mm256_setr_epi32(0, 1, 2, 3, 5, 4, 6, 7);
-    let use_prev = q.mw > 0.0;
-    let r = HALF as f32;
-    let pad = PAD as f32;
-    let mut acc = _mm256_setzero_ps();
-    let mut om = 0.0f32;
-    let tstride = tgt.stride;
-    let cur = tgt.cur.as_ptr() as *const f32;
-    let prev = tgt.prev.as_ptr() as *const f32;
-    let hsum = |acc: __m256| {
-        let mut l = [0.0f32; LANES];
-        // SAFETY: `l` holds 8 floats.
-        unsafe { _mm256_storeu_ps(l.as_mut_ptr(), acc) };
-        l.iter().sum::<f32>()
+    let taps = win.taps.as_ptr() as *const f32;
+    // ext± swapped (bytes 4 and 5) for a flipped candidate, else the identity.
+    let order = if flip {
+        _mm_setr_epi8(0, 1, 2, 3, 5, 4, 6, 7, -1, -1, -1, -1, -1, -1, -1, -1)
+    } else {
+        _mm_setr_epi8(0, 1, 2, 3, 4, 5, 6, 7, -1, -1, -1, -1, -1, -1, -1, -1)
     };
-    for b in 0..(2 * HALF + 1) {
+    // SAFETY: `w` holds 8 floats.
+    let w = unsafe { _mm256_loadu_ps(win.w.as_ptr()) };
+    let r = HALF as f32;
+    let (px, py) = (cx + PAD as f32, cy + PAD as f32);
+    // Two accumulators (even and odd columns) halve the chain of dependent additions.
+    let mut acc = [_mm256_setzero_ps(); 2];
+    // The tree order of `tree_sum`.
+    let hsum = |x: __m256| -> f32 {
+        let s4 = _mm_add_ps(_mm256_castps256_ps128(x), _mm256_extractf128_ps::<1>(x));
+        let s2 = _mm_add_ps(s4, _mm_movehl_ps(s4, s4));
+        _mm_cvtss_f32(_mm_add_ss(s2, _mm_shuffle_ps::<1>(s2, s2))) + win.base
+    };
+    for b in 0..PATCH {
         let bf = b as f32 - r;
-        let trow = q.tq + b * tstride - HALF - HALF * tstride;
-        for a in 0..(2 * HALF + 1) {
+        for a in 0..PATCH {
             let af = a as f32 - r;
-            let sx = cx + pad + (c * af - s * bf);
-            let sy = cy + pad + (s * af + c * bf);
+            // Tap position M·(a, b) around the center, in padded coordinates.
+            let sx = px + (c * af - s * bf);
+            let sy = py + (s * af + c * bf);
             // SAFETY (all unchecked accesses below): the padded coordinates are positive and
-            // inside frame i's padded block by the validity rule; target arrays are padded by
-            // ⌊n/2⌋ around every pixel; the CPU has AVX2 (checked by the caller).
-            let (x0, y0) = unsafe {
-                ((sx + 0.5).to_int_unchecked::<i32>() as usize, (sy + 0.5).to_int_unchecked::<i32>() as usize)
-            };
-            let idx = fbase + y0 * stride + x0;
-            debug_assert!(idx < src.feat.len());
-            let bytes = unsafe { _mm_loadl_epi64(feat.add(idx) as *const __m128i) };
-            let mut v = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes));
-            if flip {
-                v = _mm256_permutevar8x32_ps(v, swap);
-            }
-            let ti = trow + a;
-            debug_assert!(ti < tgt.cur.len());
-            let t = unsafe { _mm256_loadu_ps(cur.add(ti * LANES)) };
+            // inside frame i's padded block by the validity rule; the window has n² taps; the
+            // CPU has AVX2 (checked by the caller).
+            let idx = unsafe { tap_index(fbase, stride, sx, sy) };
+            debug_assert!(idx < feat.len());
+            let bytes = _mm_shuffle_epi8(unsafe { _mm_loadl_epi64(fp.add(idx) as *const __m128i) }, order);
+            let v = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes));
+            let t = unsafe { _mm256_loadu_ps(taps.add((b * PATCH + a) * LANES)) };
             let d = _mm256_sub_ps(v, t);
-            acc = _mm256_add_ps(acc, _mm256_mul_ps(_mm256_mul_ps(wc, d), d));
-            if use_prev {
-                let p = unsafe { _mm256_loadu_ps(prev.add(ti * LANES)) };
-                let e = _mm256_sub_ps(v, p);
-                acc = _mm256_add_ps(acc, _mm256_mul_ps(_mm256_mul_ps(wp, e), e));
-            }
-            om += unsafe { *omega.get_unchecked(idx) };
+            acc[a & 1] = _mm256_add_ps(acc[a & 1], _mm256_mul_ps(_mm256_mul_ps(w, d), d));
         }
-        let total = hsum(acc) + om;
+        let total = hsum(_mm256_add_ps(acc[0], acc[1]));
         if total > best {
             return total;
         }
     }
-    hsum(acc) + om
+    hsum(_mm256_add_ps(acc[0], acc[1]))
 }
 
 #[allow(clippy::too_many_arguments)]
 fn patch_error_generic(
     src: &SourceLevel,
-    omega: &OmegaMap,
-    tgt: &TargetLevel,
-    q: Query,
+    feat: &[Feat],
+    win: &Window,
     i: usize,
     cx: f32,
     cy: f32,
@@ -175,82 +237,40 @@ fn patch_error_generic(
     flip: bool,
     best: f32,
 ) -> f32 {
-    kernel(src, omega, tgt, q, i, cx, cy, c, s, flip, best)
-}
-
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn kernel(
-    src: &SourceLevel,
-    omega: &OmegaMap,
-    tgt: &TargetLevel,
-    q: Query,
-    i: usize,
-    cx: f32,
-    cy: f32,
-    c: f32,
-    s: f32,
-    flip: bool,
-    best: f32,
-) -> f32 {
-    let feat = &src.feat[..];
-    let stride = src.stride;
+    let stride = src.stride as i32;
     let fbase = i * src.frame_len;
-    let lw = &src.lane_w;
-    let wc = [q.w_col * lw[0], q.w_col * lw[1], q.w_col * lw[2], lw[3], lw[4], lw[5], 0.0, 0.0];
-    let wp = [q.mw * lw[0], q.mw * lw[1], q.mw * lw[2], 0.0, 0.0, 0.0, 0.0, 0.0];
-    let use_prev = q.mw > 0.0;
+    let taps = &win.taps;
+    let w = &win.w;
     let r = HALF as f32;
-    let pad = PAD as f32;
-    let mut acc = [0.0f32; LANES];
-    let mut om = 0.0f32;
-    let tstride = tgt.stride;
-    for b in 0..(2 * HALF + 1) {
+    let (px, py) = (cx + PAD as f32, cy + PAD as f32);
+    let mut acc = [[0.0f32; LANES]; 2];
+    let sum = |acc: &[[f32; LANES]; 2]| tree_sum(&std::array::from_fn(|k| acc[0][k] + acc[1][k])) + win.base;
+    for b in 0..PATCH {
         let bf = b as f32 - r;
-        let trow = q.tq + b * tstride - HALF - HALF * tstride;
-        for a in 0..(2 * HALF + 1) {
+        for a in 0..PATCH {
             let af = a as f32 - r;
-            // Tap position M·(a, b) around the center, in padded coordinates.
-            let sx = cx + pad + (c * af - s * bf);
-            let sy = cy + pad + (s * af + c * bf);
-            // Nearest exemplar pixel of the tap; truncation is floor since padded coordinates
-            // are positive by the validity rule (so no saturating conversion is needed).
+            let sx = px + (c * af - s * bf);
+            let sy = py + (s * af + c * bf);
             // SAFETY: sx, sy are finite and within the padded frame (validity rule).
-            let (x0, y0) = unsafe {
-                ((sx + 0.5).to_int_unchecked::<i32>() as usize, (sy + 0.5).to_int_unchecked::<i32>() as usize)
-            };
-            let idx = fbase + y0 * stride + x0;
+            let idx = unsafe { tap_index(fbase, stride, sx, sy) };
             debug_assert!(idx < feat.len() && sx >= 0.0 && sy >= 0.0);
             // SAFETY: idx lies in frame i's padded block (validity rule above).
-            let p00 = unsafe { feat.get_unchecked(idx) };
-            let mut v: [f32; LANES] = p00.map(|b| b as f32);
+            let mut v = *unsafe { feat.get_unchecked(idx) };
             if flip {
                 v.swap(4, 5);
             }
-            let ti = trow + a;
-            debug_assert!(ti < tgt.cur.len());
-            // SAFETY: the target arrays are padded by ⌊n/2⌋ around every pixel.
-            let t = unsafe { tgt.cur.get_unchecked(ti) };
+            let t = &taps[b * PATCH + a];
             for k in 0..LANES {
-                let d = v[k] - t[k];
-                acc[k] += wc[k] * d * d;
+                let d = v[k] as f32 - t[k];
+                acc[a & 1][k] += w[k] * d * d;
             }
-            if use_prev {
-                let p = unsafe { tgt.prev.get_unchecked(ti) };
-                for k in 0..LANES {
-                    let d = v[k] - p[k];
-                    acc[k] += wp[k] * d * d;
-                }
-            }
-            // SAFETY: same index as above.
-            om += unsafe { *omega.get_unchecked(idx) };
         }
-        let total = acc.iter().sum::<f32>() + om;
+        let total = sum(&acc);
         if total > best {
             return total;
         }
     }
-    acc.iter().sum::<f32>() + om
+    sum(&acc)
 }
 
 /// A plain, obviously-correct version of [`patch_error`] (no early exit, straight loops, f64
@@ -259,7 +279,7 @@ fn kernel(
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn patch_error_reference(
     src: &SourceLevel,
-    omega: &OmegaMap,
+    feat: &[Feat],
     tgt: &TargetLevel,
     q: Query,
     i: usize,
@@ -273,7 +293,7 @@ pub(crate) fn patch_error_reference(
     let sample = |x: f32, y: f32| -> [f32; LANES] {
         let px = (x + 0.5).floor() as usize;
         let py = (y + 0.5).floor() as usize;
-        src.feat[i * src.frame_len + py * src.stride + px].map(|b| b as f32)
+        feat[i * src.frame_len + py * src.stride + px].map(|b| b as f32)
     };
     for b in -(HALF as isize)..=HALF as isize {
         for a in -(HALF as isize)..=HALF as isize {
@@ -295,9 +315,8 @@ pub(crate) fn patch_error_reference(
             for k in 3..6 {
                 total += (lw[k] * (v[k] - t[k]).powi(2)) as f64;
             }
-            let ox = (x + 0.5).floor() as usize;
-            let oy = (y + 0.5).floor() as usize;
-            total += omega[i * src.frame_len + oy * src.stride + ox] as f64;
+            // The occurrence penalty w_Ω·q².
+            total += (q.w_om * v[OMEGA_LANE] * v[OMEGA_LANE]) as f64;
         }
     }
     total
@@ -344,7 +363,10 @@ mod tests {
         for px in tgt.prev.iter_mut() {
             px[..3].copy_from_slice(&[rng.f32() * 255.0, rng.f32() * 255.0, rng.f32() * 255.0]);
         }
-        let omega: Vec<f32> = (0..src.feat.len()).map(|_| rng.f32() * 0.01).collect();
+        let mut feat = src.feat.clone();
+        for f in feat.iter_mut() {
+            f[OMEGA_LANE] = rng.below(256) as u8;
+        }
         let mut checked = 0;
         for _ in 0..400 {
             let list = &src.valid[rng.below(2)];
@@ -356,18 +378,23 @@ mod tests {
             let th = rng.range_f32(-std::f32::consts::PI, std::f32::consts::PI);
             let (c, s) = (th.cos(), th.sin());
             let q = tgt.active[rng.below(tgt.active.len())] as usize;
-            let query =
-                Query { tq: tgt.pindex(q % 30, q / 30), w_col: 1.0, mw: if rng.f32() < 0.5 { 0.0 } else { 0.7 } };
+            let query = Query {
+                tq: tgt.pindex(q % 30, q / 30),
+                w_col: 1.0,
+                mw: if rng.f32() < 0.5 { 0.0 } else { 0.7 },
+                w_om: if rng.f32() < 0.3 { 0.0 } else { 1e-4 },
+            };
             let flip = rng.f32() < 0.5;
             assert!(src.info_at(i, cx, cy).unwrap().1.flags & VALID != 0);
-            let fast = patch_error(src, &omega, &tgt, query, i, cx, cy, c, s, flip, f32::INFINITY);
-            let slow = patch_error_reference(src, &omega, &tgt, query, i, cx, cy, c, s, flip);
+            let win = Window::new(src, &tgt, &query);
+            let fast = patch_error(src, &feat, &win, i, cx, cy, c, s, flip, f32::INFINITY);
+            let slow = patch_error_reference(src, &feat, &tgt, query, i, cx, cy, c, s, flip);
             assert!(((fast as f64) - slow).abs() <= 1e-4 * slow.max(1.0), "{fast} vs {slow}");
-            let generic = patch_error_generic(src, &omega, &tgt, query, i, cx, cy, c, s, flip, f32::INFINITY);
+            let generic = patch_error_generic(src, &feat, &win, i, cx, cy, c, s, flip, f32::INFINITY);
             assert_eq!(fast.to_bits(), generic.to_bits(), "SIMD and generic builds must agree bit for bit");
             // Early termination: a bound below the true error returns something above the bound.
             let bound = fast * 0.3;
-            let partial = patch_error(src, &omega, &tgt, query, i, cx, cy, c, s, flip, bound);
+            let partial = patch_error(src, &feat, &win, i, cx, cy, c, s, flip, bound);
             assert!(partial > bound && partial <= fast + 1e-3);
             checked += 1;
         }
@@ -387,11 +414,12 @@ mod tests {
                 tgt.cur[k][..3].copy_from_slice(&rgb.get(x, y).map(|v| (v * 255.0).round()));
             }
         }
-        let omega = vec![0.0; src.feat.len()];
-        let q = Query { tq: tgt.pindex(16, 16), w_col: 1.0, mw: 0.0 };
-        let e = patch_error(src, &omega, &tgt, q, 1, 16.0, 16.0, 1.0, 0.0, false, f32::INFINITY);
+        let feat = src.feat.clone();
+        let q = Query { tq: tgt.pindex(16, 16), w_col: 1.0, mw: 0.0, w_om: 0.0 };
+        let win = Window::new(src, &tgt, &q);
+        let e = patch_error(src, &feat, &win, 1, 16.0, 16.0, 1.0, 0.0, false, f32::INFINITY);
         assert!(e < 1e-9, "{e}");
-        let shifted = patch_error(src, &omega, &tgt, q, 1, 17.0, 16.0, 1.0, 0.0, false, f32::INFINITY);
+        let shifted = patch_error(src, &feat, &win, 1, 17.0, 16.0, 1.0, 0.0, false, f32::INFINITY);
         assert!(shifted > 0.1);
     }
 }
@@ -416,47 +444,43 @@ mod speed {
         let src = &pyr.levels[0];
         let (_, tg) = synthetic(500, 400, 150.0, 99);
         let tgt = TargetLevel::new(&tg, &pyr.quant, 10.0, None, [1.0, 1.0, 1.0]);
-        let omega = vec![0.0f32; src.feat.len()];
+        let feat = src.feat.clone();
         let mut rng = Rng::keyed(&[5]);
         let n: usize = std::env::var("FM_N").ok().and_then(|v| v.parse().ok()).unwrap_or(2_000_000);
+        let windows = |mw: f32| -> Vec<Window> {
+            (0..256)
+                .map(|k| {
+                    let q = tgt.active[(k * 7919) % tgt.active.len()] as usize;
+                    Window::new(src, &tgt, &Query { tq: tgt.pindex(q % 500, q / 500), w_col: 1.0, mw, w_om: 0.0 })
+                })
+                .collect()
+        };
         let cands: Vec<_> = (0..n)
             .map(|_| {
                 let list = &src.valid[1];
                 let (i, x, y) = src.coords(list[rng.below(list.len())] as usize);
                 let th = rng.range_f32(-3.0, 3.0);
-                let q = tgt.active[rng.below(tgt.active.len())] as usize;
-                (i, x as f32 + 0.3, y as f32 - 0.2, th.cos(), th.sin(), tgt.pindex(q % 500, q / 500))
+                (i, x as f32 + 0.3, y as f32 - 0.2, th.cos(), th.sin(), rng.below(256))
             })
             .collect();
         for (label, mw) in [("no prev", 0.0), ("with prev", 1.0)] {
+            let wins = windows(mw);
             let t = std::time::Instant::now();
             let mut sum = 0.0;
-            for &(i, x, y, c, s, tq) in &cands {
-                sum +=
-                    patch_error(src, &omega, &tgt, Query { tq, w_col: 1.0, mw }, i, x, y, c, s, false, f32::INFINITY);
+            for &(i, x, y, c, s, k) in &cands {
+                sum += patch_error(src, &feat, &wins[k], i, x, y, c, s, false, f32::INFINITY);
             }
             let ns = t.elapsed().as_nanos() as f64 / n as f64;
             println!("{label}: {ns:.1} ns per full evaluation (random access) [{sum}]");
         }
         // Coherent access: neighbouring candidates
+        let wins = windows(1.0);
         let t = std::time::Instant::now();
         let mut sum = 0.0;
         for k in 0..n {
             let x = 20.0 + (k % 300) as f32 + 0.3;
             let y = 80.0 + ((k / 300) % 50) as f32;
-            sum += patch_error(
-                src,
-                &omega,
-                &tgt,
-                Query { tq: tgt.pindex(200 + k % 100, 200), w_col: 1.0, mw: 1.0 },
-                3,
-                x,
-                y,
-                0.8,
-                0.6,
-                true,
-                f32::INFINITY,
-            );
+            sum += patch_error(src, &feat, &wins[k % 100], 3, x, y, 0.8, 0.6, true, f32::INFINITY);
         }
         println!("coherent: {:.1} ns [{sum}]", t.elapsed().as_nanos() as f64 / n as f64);
     }
@@ -486,9 +510,9 @@ mod terms {
                 }
             }
             edit(&mut tgt);
-            let omega = vec![0.0; src.feat.len()];
-            let q = Query { tq: tgt.pindex(20, 20), w_col: 1.0, mw: params.w_prev };
-            patch_error(src, &omega, &tgt, q, 1, 20.0, 20.0, 1.0, 0.0, false, f32::INFINITY)
+            let feat = src.feat.clone();
+            let q = Query { tq: tgt.pindex(20, 20), w_col: 1.0, mw: params.w_prev, w_om: 0.0 };
+            patch_error(src, &feat, &Window::new(src, &tgt, &q), 1, 20.0, 20.0, 1.0, 0.0, false, f32::INFINITY)
         };
         let shift_lane = |lane: usize, by: f32| {
             move |t: &mut TargetLevel| {

@@ -2,10 +2,12 @@
 //! padded array of 8-byte pixels, so that a tap is one 8-byte load and the exemplar stays small
 //! enough for the caches (random access dominates PatchMatch).
 //!
-//! Lanes: `[r, g, b, S^df, S^ext+, S^ext−, 0, 0]`, each quantized to 8 bits by [`Quant`]
-//! (rgb exactly as in the 8-bit exemplar; `S^df` over [−1, 1]; extents over [0, max ext]).
-//! Target values are kept in the same units but unrounded, and the per-lane weights absorb
-//! the quantization steps (see [`super::patch`]).
+//! Lanes: `[r, g, b, S^df, S^ext+, S^ext−, flags, Ω]`, each 8 bits: the features quantized by
+//! [`Quant`] (rgb exactly as in the 8-bit exemplar; `S^df` over [−1, 1]; extents over
+//! [0, max ext]), the pixel's flags ([`FLAG_LANE`]), and the occurrence penalty
+//! ([`OMEGA_LANE`], 0 here; a search writes it into its own copy, see
+//! [`super::occurrence::penalty`]). Target values are kept in the same units but unrounded,
+//! and the per-lane weights absorb the quantization steps (see [`super::patch`]).
 
 use super::params::{HALF, Params};
 use crate::guide::FrameGuides;
@@ -75,6 +77,10 @@ pub(crate) const IN_MASK: u8 = 4;
 /// stays exact in [`PixInfo`]: quantizing it to 8 bits turns the θ = 0 of equal flows into
 /// ±1.4° and costs the identity test 4–6 dB.)
 pub(crate) const FLAG_LANE: usize = 6;
+/// Feature lane holding the occurrence penalty of the voxel, as `√(Ω penalty / w_Ω)` in 8 bits
+/// ([`super::occurrence::penalty`]): the target's lane is 0, so the patch error's weighted
+/// squared difference of this lane *is* the penalty, with no second array to read.
+pub(crate) const OMEGA_LANE: usize = 7;
 /// ⌊v⌋ for finite `v` in i32 range, without a libm call (saturates outside).
 #[inline(always)]
 pub(crate) fn floor_i32(v: f32) -> i32 {
@@ -168,6 +174,9 @@ pub(crate) struct SourceLevel {
     pub feat: Vec<Feat>,
     /// Per-pixel info, same padded layout (padding is invalid).
     pub info: Vec<PixInfo>,
+    /// The flow directions of `info` alone (8 bytes a pixel instead of 24), for the candidate
+    /// checks of the search, which read them at random places.
+    pub dirs: Vec<Vec2>,
     /// Valid centers per segment (0 = border, 1 = interior), as padded indices.
     pub valid: [Vec<u32>; 2],
     /// |S_seg|: mask pixels per segment over all frames (for ω*).
@@ -208,13 +217,14 @@ impl SourceLevel {
         self.nearest(i, x, y).map(|idx| (idx, &self.info[idx]))
     }
 
-    /// Flags (from the feature lane [`FLAG_LANE`], the cache line the patch error reads) and
-    /// flow direction of the pixel nearest to (x, y) in frame i.
+    /// Flags (from the feature lane [`FLAG_LANE`] of `feat`, this level's features or a copy
+    /// with the occurrence lane filled: the cache line the patch error reads next) and flow
+    /// direction of the pixel nearest to (x, y) in frame i.
     #[inline]
-    pub fn hot_at(&self, i: usize, x: f32, y: f32) -> Option<(u8, Vec2)> {
+    pub fn hot_at(&self, feat: &[Feat], i: usize, x: f32, y: f32) -> Option<(u8, Vec2)> {
         let idx = self.nearest(i, x, y)?;
-        let flags = self.feat[idx][FLAG_LANE];
-        Some((flags, if flags & VALID != 0 { self.info[idx].dir } else { Vec2::ZERO }))
+        let flags = feat[idx][FLAG_LANE];
+        Some((flags, if flags & VALID != 0 { self.dirs[idx] } else { Vec2::ZERO }))
     }
 
     /// Bilinear sample of the rgb lanes at (x, y) of frame i (clamped to the padded frame).
@@ -433,7 +443,8 @@ fn build_level(rgb: &[Plane<Rgb>], guides: &[FrameGuides], qn: &Quant, lane_w: [
             }
         }
     }
-    SourceLevel { w, h, frames, stride, frame_len, feat, info, valid, seg_count, lane_w }
+    let dirs = info.iter().map(|p| p.dir).collect();
+    SourceLevel { w, h, frames, stride, frame_len, feat, info, dirs, valid, seg_count, lane_w }
 }
 
 #[cfg(test)]
