@@ -3,48 +3,68 @@
 //! `Ω(p′) = Ω*(p′)/(n²·ω*)` with `ω* = n²(2r+1)·|T_seg|/|S_seg|` per segment.
 //!
 //! Boxes are accumulated with +1/−1 markers along time and one prefix sum, so each target
-//! pixel costs n² updates whatever r is. Counting uses atomic integer adds, whose result does
-//! not depend on the order (deterministic for any thread count).
+//! pixel costs n² updates whatever r is. Each thread counts a part of the target into its own
+//! array and the arrays are added: integer sums do not depend on the order (deterministic for
+//! any thread count).
 
 use super::nnf::{Nnf, offsets};
 use super::params::PATCH;
 use super::source::{FLAG_LANE, Feat, IN_MASK, INTERIOR, OMEGA_LANE, PAD, SourceLevel, floor_i32};
 use super::target::TargetLevel;
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicI32, Ordering};
 
 /// Raw counts Ω*(i, x, y) in the padded source layout.
 pub(crate) fn counts(src: &SourceLevel, nnf: &Nnf, tgt: &TargetLevel, r: usize) -> Vec<i32> {
     let len = src.feat.len();
-    let delta: Vec<AtomicI32> = (0..len).map(|_| AtomicI32::new(0)).collect();
     let frames = src.frames;
-    tgt.active.par_iter().for_each(|&q| {
-        let q = q as usize;
-        if tgt.info[q].flags & IN_MASK == 0 {
-            return;
-        }
-        let m = &nnf.data[q];
-        if !m.ok {
-            return;
-        }
-        let i = m.i as usize;
-        let lo = i.saturating_sub(r);
-        let hi = (i + r + 1).min(frames);
-        for (a, b) in offsets() {
-            let (dx, dy) = m.rotate(a as f32, b as f32);
-            let px = floor_i32(m.x + dx + PAD as f32 + 0.5);
-            let py = floor_i32(m.y + dy + PAD as f32 + 0.5);
-            if px < 0 || py < 0 || px >= src.stride as i32 || py >= (src.frame_len / src.stride) as i32 {
-                continue;
+    let rows = (src.frame_len / src.stride) as i32;
+    // One plain (non-atomic) array of +1/−1 markers per part of the target, summed after:
+    // integer sums do not depend on the order, so the counts are the same for any split.
+    let parts = rayon::current_num_threads().clamp(1, 8);
+    let per = tgt.active.len().div_ceil(parts).max(1);
+    let marks: Vec<Vec<i32>> = tgt
+        .active
+        .par_chunks(per)
+        .map(|chunk| {
+            let mut delta = vec![0i32; len];
+            for &q in chunk {
+                let q = q as usize;
+                if tgt.info[q].flags & IN_MASK == 0 {
+                    continue;
+                }
+                let m = &nnf.data[q];
+                if !m.ok {
+                    continue;
+                }
+                let i = m.i as usize;
+                let lo = i.saturating_sub(r) * src.frame_len;
+                let hi = (i + r + 1 < frames).then_some((i + r + 1) * src.frame_len);
+                for (a, b) in offsets() {
+                    let (dx, dy) = m.rotate(a as f32, b as f32);
+                    let px = floor_i32(m.x + dx + PAD as f32 + 0.5);
+                    let py = floor_i32(m.y + dy + PAD as f32 + 0.5);
+                    if px < 0 || py < 0 || px >= src.stride as i32 || py >= rows {
+                        continue;
+                    }
+                    let pix = py as usize * src.stride + px as usize;
+                    delta[lo + pix] += 1;
+                    if let Some(hi) = hi {
+                        delta[hi + pix] -= 1;
+                    }
+                }
             }
-            let pix = py as usize * src.stride + px as usize;
-            delta[lo * src.frame_len + pix].fetch_add(1, Ordering::Relaxed);
-            if hi < frames {
-                delta[hi * src.frame_len + pix].fetch_sub(1, Ordering::Relaxed);
+            delta
+        })
+        .collect();
+    let mut parts = marks.into_iter();
+    let mut out = parts.next().unwrap_or_else(|| vec![0; len]);
+    for other in parts {
+        out.par_chunks_mut(1 << 16).zip(other.par_chunks(1 << 16)).for_each(|(o, p)| {
+            for (o, p) in o.iter_mut().zip(p) {
+                *o += *p;
             }
-        }
-    });
-    let mut out: Vec<i32> = delta.into_iter().map(|a| a.into_inner()).collect();
+        });
+    }
     // Prefix sum along time, per pixel.
     let fl = src.frame_len;
     for i in 1..frames {
@@ -101,7 +121,7 @@ pub(crate) fn penalty(
                 0
             } else {
                 let seg = (f[FLAG_LANE] & INTERIOR != 0) as usize;
-                (255.0 * (c as f32 * k[seg]).sqrt()).round().min(255.0) as u8
+                ((255.0 * (c as f32 * k[seg]).sqrt() + 0.5) as u32).min(255) as u8
             };
         }
     });

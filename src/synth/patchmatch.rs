@@ -118,7 +118,13 @@ impl<'a> Ctx<'a> {
     /// Validates a candidate center: the nearest pixel is a valid center of the right segment.
     #[inline]
     pub fn check(&self, seg: Option<usize>, i: usize, x: f32, y: f32) -> Option<Vec2> {
-        let (flags, dir) = self.src.hot_at(self.feat, i, x, y)?;
+        self.check_at(seg, self.src.nearest(i, x, y)?)
+    }
+
+    /// [`Ctx::check`] for the pixel with padded index `idx`; returns its flow direction.
+    #[inline]
+    fn check_at(&self, seg: Option<usize>, idx: usize) -> Option<Vec2> {
+        let flags = self.feat[idx][super::source::FLAG_LANE];
         if flags & VALID == 0 {
             return None;
         }
@@ -127,14 +133,14 @@ impl<'a> Ctx<'a> {
         {
             return None;
         }
-        Some(dir)
+        Some(self.src.dirs[idx])
     }
 
-    /// Hints the CPU to load the exemplar rows a candidate at (i, x, y) reads.
+    /// Hints the CPU to load the exemplar rows a candidate at padded index `idx` reads.
     #[inline(always)]
-    fn prefetch(&self, i: usize, x: f32, y: f32) {
+    fn prefetch(&self, idx: usize) {
         #[cfg(target_arch = "x86_64")]
-        if let Some(idx) = self.src.nearest(i, x, y) {
+        {
             use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
             let stride = self.src.stride;
             let lo = idx.saturating_sub(HALF * stride + HALF);
@@ -186,6 +192,7 @@ impl<'a> Ctx<'a> {
     fn try_candidate(
         &self,
         q: usize,
+        seg: Option<usize>,
         win: &Window,
         best: &mut Match,
         i: usize,
@@ -194,7 +201,25 @@ impl<'a> Ctx<'a> {
         like: Option<bool>,
         stats: &mut Stats,
     ) {
-        let Some(s_dir) = self.check(self.wanted_segment(q), i, x, y) else { return };
+        let Some(s_dir) = self.check(seg, i, x, y) else { return };
+        self.try_valid(q, win, best, s_dir, i, x, y, like, stats);
+    }
+
+    /// [`Ctx::try_candidate`] for a center already checked, whose flow direction is `s_dir`.
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    fn try_valid(
+        &self,
+        q: usize,
+        win: &Window,
+        best: &mut Match,
+        s_dir: Vec2,
+        i: usize,
+        x: f32,
+        y: f32,
+        like: Option<bool>,
+        stats: &mut Stats,
+    ) {
         let (opts, n) = match like {
             Some(f) => ([self.rotation_like(q, s_dir, f); 2], 1),
             None => self.rotations(q, s_dir),
@@ -223,6 +248,7 @@ impl<'a> Ctx<'a> {
         stats: &mut Stats,
     ) -> Match {
         let win = self.window(q);
+        let seg = self.wanted_segment(q);
         let mut best = cur;
         for (n, e) in [(n1, e1), (n2, e2)] {
             let Some(n) = n else { continue };
@@ -231,43 +257,55 @@ impl<'a> Ctx<'a> {
             }
             // Jacobian of the rotation: one step in the target is M·e in the source.
             let (dx, dy) = n.rotate(e.0, e.1);
-            self.try_candidate(q, &win, &mut best, n.i as usize, n.x + dx, n.y + dy, Some(n.flip), stats);
+            self.try_candidate(q, seg, &win, &mut best, n.i as usize, n.x + dx, n.y + dy, Some(n.flip), stats);
         }
         // Random search (thesis §4.3): candidate k is drawn uniformly from α^k·(±w, ±h, ±l_S)
         // around v0, the match after propagation (as in PatchMatch), for k from 0 until the
-        // window is below one pixel. (The thesis's cuboid is half as wide; measured on the
-        // identity test, the wider one finds the exact matches far more often: 31 vs 26 dB.) The candidates do not depend on
-        // the evaluations, so they are all drawn first and the memory of candidate k + AHEAD
-        // is prefetched while candidate k is evaluated: the search is bound by the latency of
-        // reading the exemplar at random places, not by arithmetic.
+        // window is below one pixel. (The thesis's cuboid is half as wide; on the identity
+        // test the wider one found the exemplar's own patches more often, 31 vs 26 dB at seed
+        // 5.) The candidates do not depend on the evaluations, so they are all drawn first,
+        // those outside the frame dropped, and the memory of candidate k + AHEAD is prefetched
+        // while candidate k is evaluated: the search is bound by the latency of reading the
+        // exemplar at random places as much as by arithmetic.
         let v0 = best;
-        let last = (self.src.frames - 1) as f32;
-        let (mut sx, mut sy, mut si) = (self.src.w as f32, self.src.h as f32, self.src.frames as f32);
+        let src = self.src;
+        let last = src.frames as i32 - 1;
+        let (mut sx, mut sy, mut si) = (src.w as f32, src.h as f32, src.frames as f32);
         let alpha = self.params.alpha;
-        let mut cands = [(0u32, 0.0f32, 0.0f32); MAX_RANDOM];
-        let mut n = 0;
-        while (sx >= 1.0 || sy >= 1.0) && n < MAX_RANDOM {
+        // (padded index, frame, x, y) of each candidate inside the frame.
+        let mut cands = [(0usize, 0u32, 0u32, 0u32); MAX_RANDOM];
+        let mut n = 0usize;
+        let mut draws = 0;
+        while (sx >= 1.0 || sy >= 1.0) && draws < MAX_RANDOM {
+            draws += 1;
             let (ox, oy, oi) = (rng.range_f32(-sx, sx), rng.range_f32(-sy, sy), rng.range_f32(-si, si));
             (sx, sy, si) = (sx * alpha, sy * alpha, si * alpha);
-            let x = floor_i32(v0.x + ox + 0.5) as f32;
-            let y = floor_i32(v0.y + oy + 0.5) as f32;
-            let i = (floor_i32(v0.i as f32 + oi + 0.5) as f32).clamp(0.0, last) as u32;
-            // Small windows repeat candidates; an evaluation of the same one gains nothing.
-            if cands[n.saturating_sub(3)..n].contains(&(i, x, y)) {
+            let x = floor_i32(v0.x + ox + 0.5);
+            let y = floor_i32(v0.y + oy + 0.5);
+            let i = floor_i32(v0.i as f32 + oi + 0.5).clamp(0, last);
+            if x < 0 || y < 0 || x >= src.w as i32 || y >= src.h as i32 {
                 continue;
             }
-            cands[n] = (i, x, y);
+            let (x, y, i) = (x as u32, y as u32, i as u32);
+            let idx = src.index(i as usize, x as usize, y as usize);
+            // Small windows repeat candidates; an evaluation of the same one gains nothing.
+            if cands[n.saturating_sub(3)..n].iter().any(|c| c.0 == idx) {
+                continue;
+            }
+            cands[n] = (idx, i, x, y);
             n += 1;
         }
-        for &(i, x, y) in &cands[..n.min(AHEAD)] {
-            self.prefetch(i as usize, x, y);
+        for c in &cands[..n.min(AHEAD)] {
+            self.prefetch(c.0);
         }
         for k in 0..n {
-            if let Some(&(i, x, y)) = cands.get(k + AHEAD).filter(|_| k + AHEAD < n) {
-                self.prefetch(i as usize, x, y);
+            if k + AHEAD < n {
+                self.prefetch(cands[k + AHEAD].0);
             }
-            let (i, x, y) = cands[k];
-            self.try_candidate(q, &win, &mut best, i as usize, x, y, None, stats);
+            let (idx, i, x, y) = cands[k];
+            if let Some(s_dir) = self.check_at(seg, idx) {
+                self.try_valid(q, &win, &mut best, s_dir, i as usize, x as f32, y as f32, None, stats);
+            }
         }
         best
     }

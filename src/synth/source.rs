@@ -217,16 +217,6 @@ impl SourceLevel {
         self.nearest(i, x, y).map(|idx| (idx, &self.info[idx]))
     }
 
-    /// Flags (from the feature lane [`FLAG_LANE`] of `feat`, this level's features or a copy
-    /// with the occurrence lane filled: the cache line the patch error reads next) and flow
-    /// direction of the pixel nearest to (x, y) in frame i.
-    #[inline]
-    pub fn hot_at(&self, feat: &[Feat], i: usize, x: f32, y: f32) -> Option<(u8, Vec2)> {
-        let idx = self.nearest(i, x, y)?;
-        let flags = feat[idx][FLAG_LANE];
-        Some((flags, if flags & VALID != 0 { self.dirs[idx] } else { Vec2::ZERO }))
-    }
-
     /// Bilinear sample of the rgb lanes at (x, y) of frame i (clamped to the padded frame).
     #[inline]
     pub fn sample_rgb(&self, i: usize, x: f32, y: f32) -> Rgb {
@@ -237,14 +227,13 @@ impl SourceLevel {
         let fx = px - x0 as f32;
         let fy = py - y0 as f32;
         let base = i * self.frame_len + y0 * self.stride + x0;
-        let p = |k: usize, c: usize| self.feat[k][c] as f32;
-        let mut out = [0.0; 3];
-        for (c, o) in out.iter_mut().enumerate() {
-            let top = p(base, c) + (p(base + 1, c) - p(base, c)) * fx;
-            let bot = p(base + self.stride, c) + (p(base + self.stride + 1, c) - p(base + self.stride, c)) * fx;
-            *o = (top + (bot - top) * fy) * (1.0 / 255.0);
-        }
-        out
+        // One bounds check for the 2 × 2 block; 4-lane arithmetic that vectorizes.
+        let quad = &self.feat[base..=base + self.stride + 1];
+        let p = |k: usize| -> [f32; 4] { std::array::from_fn(|c| quad[k][c] as f32) };
+        let (a, b, c, d) = (p(0), p(1), p(self.stride), p(self.stride + 1));
+        let top: [f32; 4] = std::array::from_fn(|c| a[c] + (b[c] - a[c]) * fx);
+        let bot: [f32; 4] = std::array::from_fn(|k| c[k] + (d[k] - c[k]) * fx);
+        std::array::from_fn(|c| (top[c] + (bot[c] - top[c]) * fy) * (1.0 / 255.0))
     }
 }
 
@@ -271,21 +260,22 @@ impl SourceLevel {
         };
         let (wx, wy) = (wts(tx), wts(ty));
         let base = i * self.frame_len + (y0 - 1) * self.stride + x0 - 1;
-        let mut out = [0.0f32; 3];
+        // One bounds check for the 4 × 4 block; 4-lane arithmetic that vectorizes.
+        let block = &self.feat[base..base + 3 * self.stride + 4];
+        let mut out = [0.0f32; 4];
         for (j, &wyj) in wy.iter().enumerate() {
-            let row = base + j * self.stride;
-            let mut r = [0.0f32; 3];
-            for (k, &wxk) in wx.iter().enumerate() {
-                let p = &self.feat[row + k];
-                for c in 0..3 {
+            let row = &block[j * self.stride..j * self.stride + 4];
+            let mut r = [0.0f32; 4];
+            for (p, &wxk) in row.iter().zip(&wx) {
+                for c in 0..4 {
                     r[c] += wxk * p[c] as f32;
                 }
             }
-            for c in 0..3 {
+            for c in 0..4 {
                 out[c] += wyj * r[c];
             }
         }
-        out.map(|v| (v * (1.0 / 255.0)).clamp(0.0, 1.0))
+        std::array::from_fn(|c| (out[c] * (1.0 / 255.0)).clamp(0.0, 1.0))
     }
 }
 
