@@ -12,7 +12,7 @@ use super::nnf::{Match, Nnf, aligning_rotation};
 use super::params::{HALF, PATCH, Params};
 use super::patch::{Query, Window, patch_error};
 use super::rng::Rng;
-use super::source::{Feat, INTERIOR, SourceLevel, VALID, floor_i32};
+use super::source::{Feat, SourceLevel, VALID, floor_i32};
 use super::target::TargetLevel;
 use glam::Vec2;
 use rayon::prelude::*;
@@ -124,16 +124,7 @@ impl<'a> Ctx<'a> {
     /// [`Ctx::check`] for the pixel with padded index `idx`; returns its flow direction.
     #[inline]
     fn check_at(&self, seg: Option<usize>, idx: usize) -> Option<Vec2> {
-        let flags = self.feat[idx][super::source::FLAG_LANE];
-        if flags & VALID == 0 {
-            return None;
-        }
-        if let Some(seg) = seg
-            && ((flags & INTERIOR != 0) as usize) != seg
-        {
-            return None;
-        }
-        Some(self.src.dirs[idx])
+        self.src.is_valid(seg, idx).then(|| self.src.dirs[idx])
     }
 
     /// Hints the CPU to load the exemplar rows a candidate at padded index `idx` reads.
@@ -264,7 +255,7 @@ impl<'a> Ctx<'a> {
         // window is below one pixel. (The thesis's cuboid is half as wide; on the identity
         // test the wider one found the exemplar's own patches more often, 31 vs 26 dB at seed
         // 5.) The candidates do not depend on the evaluations, so they are all drawn first,
-        // those outside the frame dropped, and the memory of candidate k + AHEAD is prefetched
+        // those outside the frame or the segment's valid centers dropped (a bit table), and the memory of candidate k + AHEAD is prefetched
         // while candidate k is evaluated: the search is bound by the latency of reading the
         // exemplar at random places as much as by arithmetic.
         let v0 = best;
@@ -272,7 +263,7 @@ impl<'a> Ctx<'a> {
         let last = src.frames as i32 - 1;
         let (mut sx, mut sy, mut si) = (src.w as f32, src.h as f32, src.frames as f32);
         let alpha = self.params.alpha;
-        // (padded index, frame, x, y) of each candidate inside the frame.
+        // (padded index, frame, x, y) of each valid candidate.
         let mut cands = [(0usize, 0u32, 0u32, 0u32); MAX_RANDOM];
         let mut n = 0usize;
         let mut draws = 0;
@@ -289,7 +280,7 @@ impl<'a> Ctx<'a> {
             let (x, y, i) = (x as u32, y as u32, i as u32);
             let idx = src.index(i as usize, x as usize, y as usize);
             // Small windows repeat candidates; an evaluation of the same one gains nothing.
-            if cands[n.saturating_sub(3)..n].iter().any(|c| c.0 == idx) {
+            if !src.is_valid(seg, idx) || cands[n.saturating_sub(3)..n].iter().any(|c| c.0 == idx) {
                 continue;
             }
             cands[n] = (idx, i, x, y);
@@ -303,9 +294,8 @@ impl<'a> Ctx<'a> {
                 self.prefetch(cands[k + AHEAD].0);
             }
             let (idx, i, x, y) = cands[k];
-            if let Some(s_dir) = self.check_at(seg, idx) {
-                self.try_valid(q, &win, &mut best, s_dir, i as usize, x as f32, y as f32, None, stats);
-            }
+            let s_dir = src.dirs[idx];
+            self.try_valid(q, &win, &mut best, s_dir, i as usize, x as f32, y as f32, None, stats);
         }
         best
     }

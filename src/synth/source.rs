@@ -179,6 +179,10 @@ pub(crate) struct SourceLevel {
     pub dirs: Vec<Vec2>,
     /// Valid centers per segment (0 = border, 1 = interior), as padded indices.
     pub valid: [Vec<u32>; 2],
+    /// The same as bit sets over padded indices (bit `idx % 64` of word `idx / 64`): 1 bit a
+    /// voxel, so the search rejects a candidate outside the mask or in the wrong segment from
+    /// a table that stays in cache, without reading the exemplar at a random place.
+    pub valid_bits: [Vec<u64>; 2],
     /// |S_seg|: mask pixels per segment over all frames (for ω*).
     pub seg_count: [usize; 2],
     /// Lane weights in quantization units ([`Quant::weights`]).
@@ -198,6 +202,16 @@ impl SourceLevel {
         let i = idx / self.frame_len;
         let r = idx % self.frame_len;
         (i, r % self.stride - PAD, r / self.stride - PAD)
+    }
+
+    /// Whether padded index `idx` is a valid center of segment `seg` (of either when `None`).
+    #[inline]
+    pub fn is_valid(&self, seg: Option<usize>, idx: usize) -> bool {
+        let bit = |s: usize| self.valid_bits[s][idx / 64] >> (idx % 64) & 1 != 0;
+        match seg {
+            Some(s) => bit(s),
+            None => bit(0) || bit(1),
+        }
     }
 
     /// Padded index of the pixel nearest to (x, y) in frame i, when inside the frame.
@@ -434,7 +448,14 @@ fn build_level(rgb: &[Plane<Rgb>], guides: &[FrameGuides], qn: &Quant, lane_w: [
         }
     }
     let dirs = info.iter().map(|p| p.dir).collect();
-    SourceLevel { w, h, frames, stride, frame_len, feat, info, dirs, valid, seg_count, lane_w }
+    let valid_bits = valid.each_ref().map(|list| {
+        let mut bits = vec![0u64; feat.len().div_ceil(64)];
+        for &idx in list {
+            bits[idx as usize / 64] |= 1 << (idx % 64);
+        }
+        bits
+    });
+    SourceLevel { w, h, frames, stride, frame_len, feat, info, dirs, valid, valid_bits, seg_count, lane_w }
 }
 
 #[cfg(test)]
