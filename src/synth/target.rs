@@ -6,6 +6,7 @@ use super::params::HALF;
 use super::source::{IN_MASK, INTERIOR, LANES, PixInfo, Quant, VALID, dilate, flow_dir};
 use crate::guide::FrameGuides;
 use crate::img::Rgb;
+use rayon::prelude::*;
 
 /// Padding of the target arrays: ⌊n/2⌋, so every window of a pixel in the frame is inside.
 pub(crate) const TPAD: usize = HALF;
@@ -37,20 +38,17 @@ impl TargetLevel {
         let cap = ext_cap.unwrap_or(f32::INFINITY);
         let roi = dilate(&g.mask, HALF);
         let mut cur = vec![[0.0f32; LANES]; stride * (h + 2 * TPAD)];
-        let mut info = vec![PixInfo::default(); w * h];
-        let mut active = Vec::new();
-        let mut seg_count = [0usize; 2];
-        for py in 0..h + 2 * TPAD {
-            for px in 0..stride {
+        cur.par_chunks_mut(stride).enumerate().for_each(|(py, row)| {
+            let y = (py as isize - TPAD as isize).clamp(0, h as isize - 1) as usize;
+            for (px, out) in row.iter_mut().enumerate() {
                 let x = (px as isize - TPAD as isize).clamp(0, w as isize - 1) as usize;
-                let y = (py as isize - TPAD as isize).clamp(0, h as isize - 1) as usize;
                 let dist = g.dist.get(x, y);
                 let df = (dist / border_width).min(1.0);
                 let ep = g.ext_pos.get(x, y).min(cap);
                 let en = g.ext_neg.get(x, y).min(cap);
                 let v = [fill[0], fill[1], fill[2], df, ep, en, 0.0, 0.0];
                 // Guide lanes on the source's 8-bit grid (identical guides compare exactly equal).
-                cur[py * stride + px] = std::array::from_fn(|k| {
+                *out = std::array::from_fn(|k| {
                     if k < 3 {
                         quant.units(k, v[k])
                     } else if k < 6 {
@@ -60,31 +58,39 @@ impl TargetLevel {
                     }
                 });
             }
-        }
-        for y in 0..h {
-            for x in 0..w {
+        });
+        let mut info = vec![PixInfo::default(); w * h];
+        info.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+            for (x, out) in row.iter_mut().enumerate() {
                 let dist = g.dist.get(x, y);
                 let interior = dist >= border_width;
-                let in_mask = g.mask.get(x, y);
                 let mut flags = 0;
                 if interior {
                     flags |= INTERIOR;
                 }
-                if in_mask {
+                if g.mask.get(x, y) {
                     flags |= IN_MASK;
-                    seg_count[interior as usize] += 1;
                 }
                 if roi.get(x, y) {
                     flags |= VALID;
-                    active.push((y * w + x) as u32);
                 }
-                info[y * w + x] = PixInfo {
+                *out = PixInfo {
                     dir: flow_dir(g.flow.get(x, y)),
                     dist,
                     ext_pos: g.ext_pos.get(x, y),
                     ext_neg: g.ext_neg.get(x, y),
                     flags,
                 };
+            }
+        });
+        let mut active = Vec::new();
+        let mut seg_count = [0usize; 2];
+        for (q, p) in info.iter().enumerate() {
+            if p.flags & IN_MASK != 0 {
+                seg_count[(p.flags & INTERIOR != 0) as usize] += 1;
+            }
+            if p.flags & VALID != 0 {
+                active.push(q as u32);
             }
         }
         let prev = vec![[0.0f32; LANES]; cur.len()];
