@@ -171,7 +171,7 @@ impl<'a> Ctx<'a> {
         }
         let idx = list[rng.below(list.len())] as usize;
         let (i, x, y) = self.src.coords(idx);
-        let (c, s, flip) = self.rotation_like(q, self.src.info[idx].dir, false);
+        let (c, s, flip) = self.rotation_like(q, self.src.dirs[idx], false);
         Match { x: x as f32, y: y as f32, c, s, err: f32::INFINITY, i: i as u16, flip, ok: true }
     }
 

@@ -72,10 +72,10 @@ pub(crate) const INTERIOR: u8 = 2;
 /// Flag: inside the (pre-processed) mask itself.
 pub(crate) const IN_MASK: u8 = 4;
 
-/// Feature lane holding the pixel's flags (weight 0 in the patch error), so that the validity
-/// check of a candidate reads the cache line the patch error reads next. (The flow direction
-/// stays exact in [`PixInfo`]: quantizing it to 8 bits turns the θ = 0 of equal flows into
-/// ±1.4° and costs the identity test 4–6 dB.)
+/// Feature lane holding the pixel's flags (weight 0 in the patch error); the search checks
+/// candidates against [`SourceLevel::valid_bits`] instead, which stays in cache. (The flow
+/// direction stays exact, in [`SourceLevel::dirs`]: quantizing it to 8 bits turns the θ = 0
+/// of equal flows into ±1.4° and cost the identity test 4–6 dB.)
 pub(crate) const FLAG_LANE: usize = 6;
 /// Feature lane holding the occurrence penalty of the voxel, as `√(Ω penalty / w_Ω)` in 8 bits
 /// ([`super::occurrence::penalty`]): the target's lane is 0, so the patch error's weighted
