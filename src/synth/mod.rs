@@ -149,6 +149,15 @@ impl Source {
         if !(border_width.is_finite() && border_width > 0.0) {
             return Err(Error::param("border-width", border_width, "a positive number of pixels"));
         }
+        // The search addresses exemplar voxels with 32-bit indices (and w, h with 16 bits).
+        let voxels = (w + 2 * source::PAD) as u64 * (h + 2 * source::PAD) as u64 * frames.len() as u64;
+        if voxels >= u32::MAX as u64 || w > u16::MAX as usize || h > u16::MAX as usize {
+            return Err(Error::param(
+                "exemplar size",
+                format!("{w}x{h}x{}", frames.len()),
+                "fewer than 2^32 padded pixels over all frames (use --src-scale or --src-speed)",
+            ));
+        }
         let mut levels = level_count(w.min(h));
         // Every level must offer candidate centers.
         let pyr = loop {
