@@ -89,7 +89,7 @@ pub(crate) const OMEGA_CAP: f32 = 32.0;
 /// patch error's `w_Ω·(q − 0)²` is the penalty: uniform use (Ω* = ω*) gives q ≈ 45, a step of
 /// ≈ 4 % there and finer below; penalties above [`OMEGA_CAP`] times that are clamped.
 /// Keeping Ω in the 8-byte pixel the error reads anyway halves the cache lines a random
-/// candidate touches (the search is bound by them, not by arithmetic).
+/// candidate touches.
 pub(crate) fn penalty(
     src: &SourceLevel,
     nnf: &Nnf,

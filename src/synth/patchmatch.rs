@@ -156,7 +156,7 @@ impl<'a> Ctx<'a> {
     /// Full error of match `m` against the target window `win` (∞ when its center is not
     /// usable).
     pub fn error_in(&self, win: &Window, m: &Match) -> f32 {
-        if !m.ok || self.src.info_at(m.i as usize, m.x, m.y).is_none_or(|(_, inf)| inf.flags & VALID == 0) {
+        if !m.ok || self.check(None, m.i as usize, m.x, m.y).is_none() {
             return f32::INFINITY;
         }
         patch_error(self.src, self.feat, win, m.i as usize, m.x, m.y, m.c, m.s, m.flip, f32::INFINITY)
@@ -255,9 +255,8 @@ impl<'a> Ctx<'a> {
         // window is below one pixel. (The thesis's cuboid is half as wide; on the identity
         // test the wider one found the exemplar's own patches more often, 31 vs 26 dB at seed
         // 5.) The candidates do not depend on the evaluations, so they are all drawn first,
-        // those outside the frame or the segment's valid centers dropped (a bit table), and the memory of candidate k + AHEAD is prefetched
-        // while candidate k is evaluated: the search is bound by the latency of reading the
-        // exemplar at random places as much as by arithmetic.
+        // those outside the frame or the segment's valid centers dropped (a bit table), and
+        // the memory of candidate k + AHEAD is prefetched while candidate k is evaluated.
         let v0 = best;
         let src = self.src;
         let last = src.frames as i32 - 1;
@@ -301,8 +300,8 @@ impl<'a> Ctx<'a> {
     }
 }
 
-/// Most random-search candidates per pixel and sweep (α = 0.75 on a 2048-pixel exemplar needs
-/// 27; α = 0.85, 47: the search then stops at the 40th).
+/// Most random-search candidates per pixel and sweep (α = 0.75 on a 4096-pixel exemplar needs
+/// 29; α = 0.85, 51: the search then stops at the 40th).
 const MAX_RANDOM: usize = 40;
 /// How many candidates ahead of the evaluation the random search prefetches.
 const AHEAD: usize = 2;
