@@ -48,10 +48,17 @@ pub(crate) struct Query {
 /// squared difference of 8 lanes read from this small block instead of two from the strided
 /// target (a = w_col·w_rgb, b = m(q)·w_prev·w_rgb; b/(a + b) is the same for the three color
 /// lanes).
+///
+/// The window also holds its point reflection with ext± swapped (`flip`): the flipped rotation
+/// −M of a candidate reads exactly the source pixels of M, tap (a, b) of −M being tap
+/// (−a, −b) of M, so the flipped error is the aligned one against the reflected window, and
+/// both come from one pass over the source pixels ([`patch_error_pair`]).
 #[derive(Clone, Debug)]
 pub(crate) struct Window {
     /// m(q′) per tap (row-major over the n × n window), in quantization units.
     taps: [[f32; LANES]; PATCH * PATCH],
+    /// `taps` point-reflected (`flip[k] = taps[n² − 1 − k]`) with lanes ext+ and ext− swapped.
+    flip: [[f32; LANES]; PATCH * PATCH],
     /// Per-lane weights: `[(w_col + m(q)·w_prev)·w_rgb, w_df, w_ext, w_ext, 0, w_Ω]`.
     w: [f32; LANES],
     /// The candidate-independent part of the temporal term, Σ a·b/(a + b)·(t − p)².
@@ -70,6 +77,8 @@ impl Window {
         let gamma: [f32; LANES] = std::array::from_fn(|k| if k < 3 { gamma * lw[k] } else { 0.0 });
         let mut w = [sum * lw[0], sum * lw[1], sum * lw[2], lw[3], lw[4], lw[5], 0.0, 0.0];
         w[OMEGA_LANE] = q.w_om;
+        // The reflected window swaps ext± on the target side, which needs equal weights.
+        debug_assert_eq!(w[4], w[5]);
         let mut taps = [[0.0f32; LANES]; PATCH * PATCH];
         let mut base = [0.0f32; LANES];
         let top = q.tq - HALF - HALF * tgt.stride;
@@ -84,14 +93,20 @@ impl Window {
                 }
             }
         }
-        Window { taps, w, base: base.iter().sum() }
+        let flip = std::array::from_fn(|k| {
+            let mut t = taps[PATCH * PATCH - 1 - k];
+            t.swap(4, 5);
+            t
+        });
+        Window { taps, flip, w, base: base.iter().sum() }
     }
 }
 
 /// D for source center (cx, cy) of frame `i` with rotation M = (c, s) against target window
 /// `win`, reading the exemplar pixels from `feat` (the level's features, or a copy with the
 /// occurrence lane filled); returns a value `> best` (possibly partial) once the running sum
-/// exceeds `best`. `flip` compares ext± swapped.
+/// exceeds `best`. `flip` compares ext± swapped (the candidate of the +π option, M = (c, s)
+/// being that option's matrix).
 ///
 /// The caller guarantees that the center's nearest pixel is a valid center (≥ `MARGIN` px from
 /// the border), so every tap lies inside the padded frame, and that `feat` has the level's
@@ -110,6 +125,50 @@ pub(crate) fn patch_error(
     flip: bool,
     best: f32,
 ) -> f32 {
+    // The flipped option with M reads the taps of −M against the reflected window.
+    let (c, s, taps) = if flip { (-c, -s, &win.flip) } else { (c, s, &win.taps) };
+    kernel::<false>(src, feat, win, [taps, taps], i, cx, cy, c, s, best).0
+}
+
+/// Both options of the flow-alignment rule at once: D with rotation M = (c, s) and D with −M
+/// and ext± swapped, from one pass over the 25 source pixels they share. Returns
+/// `(D(M), D(−M, flipped))`; the pass stops early once both running sums exceed `best`, and
+/// each value is bit-identical to [`patch_error`]'s when neither stops early. Same contract
+/// as [`patch_error`].
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn patch_error_pair(
+    src: &SourceLevel,
+    feat: &[Feat],
+    win: &Window,
+    i: usize,
+    cx: f32,
+    cy: f32,
+    c: f32,
+    s: f32,
+    best: f32,
+) -> (f32, f32) {
+    kernel::<true>(src, feat, win, [&win.taps, &win.flip], i, cx, cy, c, s, best)
+}
+
+/// Target taps of one evaluation.
+type Taps = [[f32; LANES]; PATCH * PATCH];
+
+/// The kernel: with `PAIR`, the errors against `taps[0]` and `taps[1]`, else only the first.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn kernel<const PAIR: bool>(
+    src: &SourceLevel,
+    feat: &[Feat],
+    win: &Window,
+    taps: [&Taps; 2],
+    i: usize,
+    cx: f32,
+    cy: f32,
+    c: f32,
+    s: f32,
+    best: f32,
+) -> (f32, f32) {
     debug_assert!(cx > -0.5 + super::source::MARGIN as f32 - 0.51 && cy > -0.5 + super::source::MARGIN as f32 - 0.51);
     debug_assert!(cx < (src.w - super::source::MARGIN) as f32 && cy < (src.h - super::source::MARGIN) as f32);
     debug_assert_eq!(feat.len(), src.feat.len());
@@ -117,10 +176,10 @@ pub(crate) fn patch_error(
     {
         if has_avx2() {
             // SAFETY: the CPU supports AVX2 (checked above); the body is the same safe code.
-            return unsafe { patch_error_avx2(src, feat, win, i, cx, cy, c, s, flip, best) };
+            return unsafe { kernel_avx2::<PAIR>(src, feat, win, taps, i, cx, cy, c, s, best) };
         }
     }
-    patch_error_generic(src, feat, win, i, cx, cy, c, s, flip, best)
+    kernel_generic::<PAIR>(src, feat, win, taps, i, cx, cy, c, s, best)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -164,40 +223,38 @@ fn tree_sum(a: &[f32; LANES]) -> f32 {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[allow(clippy::too_many_arguments)]
-unsafe fn patch_error_avx2(
+unsafe fn kernel_avx2<const PAIR: bool>(
     src: &SourceLevel,
     feat: &[Feat],
     win: &Window,
+    taps: [&Taps; 2],
     i: usize,
     cx: f32,
     cy: f32,
     c: f32,
     s: f32,
-    flip: bool,
     best: f32,
-) -> f32 {
+) -> (f32, f32) {
     use std::arch::x86_64::*;
     let fp = feat.as_ptr();
     let stride = src.stride as i32;
     let fbase = i * src.frame_len;
-    let taps = win.taps.as_ptr() as *const f32;
-    // ext± swapped (bytes 4 and 5) for a flipped candidate, else the identity.
-    let order = if flip {
-        _mm_setr_epi8(0, 1, 2, 3, 5, 4, 6, 7, -1, -1, -1, -1, -1, -1, -1, -1)
-    } else {
-        _mm_setr_epi8(0, 1, 2, 3, 4, 5, 6, 7, -1, -1, -1, -1, -1, -1, -1, -1)
-    };
+    let (ta, tb) = (taps[0].as_ptr() as *const f32, taps[1].as_ptr() as *const f32);
     // SAFETY: `w` holds 8 floats.
     let w = unsafe { _mm256_loadu_ps(win.w.as_ptr()) };
     let r = HALF as f32;
     let (px, py) = (cx + PAD as f32, cy + PAD as f32);
-    // Two accumulators (even and odd columns) halve the chain of dependent additions.
-    let mut acc = [_mm256_setzero_ps(); 2];
+    // Two accumulators per error (even and odd columns) halve the chain of dependent additions.
+    let mut acc = [_mm256_setzero_ps(); 4];
     // The tree order of `tree_sum`.
     let hsum = |x: __m256| -> f32 {
         let s4 = _mm_add_ps(_mm256_castps256_ps128(x), _mm256_extractf128_ps::<1>(x));
         let s2 = _mm_add_ps(s4, _mm_movehl_ps(s4, s4));
         _mm_cvtss_f32(_mm_add_ss(s2, _mm_shuffle_ps::<1>(s2, s2))) + win.base
+    };
+    let totals = |acc: &[__m256; 4]| {
+        let a = hsum(_mm256_add_ps(acc[0], acc[1]));
+        (a, if PAIR { hsum(_mm256_add_ps(acc[2], acc[3])) } else { a })
     };
     for b in 0..PATCH {
         let bf = b as f32 - r;
@@ -207,45 +264,52 @@ unsafe fn patch_error_avx2(
             let sx = px + (c * af - s * bf);
             let sy = py + (s * af + c * bf);
             // SAFETY (all unchecked accesses below): the padded coordinates are positive and
-            // inside frame i's padded block by the validity rule; the window has n² taps; the
-            // CPU has AVX2 (checked by the caller).
+            // inside frame i's padded block by the validity rule; the windows have n² taps;
+            // the CPU has AVX2 (checked by the caller).
             let idx = unsafe { tap_index(fbase, stride, sx, sy) };
             debug_assert!(idx < feat.len());
-            let bytes = _mm_shuffle_epi8(unsafe { _mm_loadl_epi64(fp.add(idx) as *const __m128i) }, order);
+            let bytes = unsafe { _mm_loadl_epi64(fp.add(idx) as *const __m128i) };
             let v = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes));
-            let t = unsafe { _mm256_loadu_ps(taps.add((b * PATCH + a) * LANES)) };
-            let d = _mm256_sub_ps(v, t);
+            let k = (b * PATCH + a) * LANES;
+            let d = _mm256_sub_ps(v, unsafe { _mm256_loadu_ps(ta.add(k)) });
             acc[a & 1] = _mm256_add_ps(acc[a & 1], _mm256_mul_ps(_mm256_mul_ps(w, d), d));
+            if PAIR {
+                let e = _mm256_sub_ps(v, unsafe { _mm256_loadu_ps(tb.add(k)) });
+                acc[2 + (a & 1)] = _mm256_add_ps(acc[2 + (a & 1)], _mm256_mul_ps(_mm256_mul_ps(w, e), e));
+            }
         }
-        let total = hsum(_mm256_add_ps(acc[0], acc[1]));
-        if total > best {
-            return total;
+        let (x, y) = totals(&acc);
+        if x > best && y > best {
+            return (x, y);
         }
     }
-    hsum(_mm256_add_ps(acc[0], acc[1]))
+    totals(&acc)
 }
 
 #[allow(clippy::too_many_arguments)]
-fn patch_error_generic(
+fn kernel_generic<const PAIR: bool>(
     src: &SourceLevel,
     feat: &[Feat],
     win: &Window,
+    taps: [&Taps; 2],
     i: usize,
     cx: f32,
     cy: f32,
     c: f32,
     s: f32,
-    flip: bool,
     best: f32,
-) -> f32 {
+) -> (f32, f32) {
     let stride = src.stride as i32;
     let fbase = i * src.frame_len;
-    let taps = &win.taps;
     let w = &win.w;
     let r = HALF as f32;
     let (px, py) = (cx + PAD as f32, cy + PAD as f32);
-    let mut acc = [[0.0f32; LANES]; 2];
-    let sum = |acc: &[[f32; LANES]; 2]| tree_sum(&std::array::from_fn(|k| acc[0][k] + acc[1][k])) + win.base;
+    let mut acc = [[0.0f32; LANES]; 4];
+    let sum = |p: &[f32; LANES], q: &[f32; LANES]| tree_sum(&std::array::from_fn(|k| p[k] + q[k])) + win.base;
+    let totals = |acc: &[[f32; LANES]; 4]| {
+        let a = sum(&acc[0], &acc[1]);
+        (a, if PAIR { sum(&acc[2], &acc[3]) } else { a })
+    };
     for b in 0..PATCH {
         let bf = b as f32 - r;
         for a in 0..PATCH {
@@ -256,22 +320,22 @@ fn patch_error_generic(
             let idx = unsafe { tap_index(fbase, stride, sx, sy) };
             debug_assert!(idx < feat.len() && sx >= 0.0 && sy >= 0.0);
             // SAFETY: idx lies in frame i's padded block (validity rule above).
-            let mut v = *unsafe { feat.get_unchecked(idx) };
-            if flip {
-                v.swap(4, 5);
-            }
-            let t = &taps[b * PATCH + a];
-            for k in 0..LANES {
-                let d = v[k] as f32 - t[k];
-                acc[a & 1][k] += w[k] * d * d;
+            let v = unsafe { feat.get_unchecked(idx) }.map(f32::from);
+            let k = b * PATCH + a;
+            for (e, t) in taps.iter().take(if PAIR { 2 } else { 1 }).enumerate() {
+                let acc = &mut acc[2 * e + (a & 1)];
+                for l in 0..LANES {
+                    let d = v[l] - t[k][l];
+                    acc[l] += w[l] * d * d;
+                }
             }
         }
-        let total = sum(&acc);
-        if total > best {
-            return total;
+        let (x, y) = totals(&acc);
+        if x > best && y > best {
+            return (x, y);
         }
     }
-    sum(&acc)
+    totals(&acc)
 }
 
 /// A plain, obviously-correct version of [`patch_error`] (no early exit, straight loops, f64
@@ -391,8 +455,25 @@ mod tests {
             let fast = patch_error(src, &feat, &win, i, cx, cy, c, s, flip, f32::INFINITY);
             let slow = patch_error_reference(src, &feat, &tgt, query, i, cx, cy, c, s, flip);
             assert!(((fast as f64) - slow).abs() <= 1e-4 * slow.max(1.0), "{fast} vs {slow}");
-            let generic = patch_error_generic(src, &feat, &win, i, cx, cy, c, s, flip, f32::INFINITY);
+            let taps = if flip { &win.flip } else { &win.taps };
+            let (gc, gs) = if flip { (-c, -s) } else { (c, s) };
+            let generic = kernel_generic::<false>(src, &feat, &win, [taps, taps], i, cx, cy, gc, gs, f32::INFINITY).0;
             assert_eq!(fast.to_bits(), generic.to_bits(), "SIMD and generic builds must agree bit for bit");
+            // The pair of options (M, −M flipped) from one pass equals the two evaluations.
+            let (ca, sa) = if flip { (-c, -s) } else { (c, s) };
+            let (ea, ef) = patch_error_pair(src, &feat, &win, i, cx, cy, ca, sa, f32::INFINITY);
+            let one = patch_error(src, &feat, &win, i, cx, cy, ca, sa, false, f32::INFINITY);
+            let other = patch_error(src, &feat, &win, i, cx, cy, -ca, -sa, true, f32::INFINITY);
+            assert_eq!((ea.to_bits(), ef.to_bits()), (one.to_bits(), other.to_bits()));
+            let generic_pair =
+                kernel_generic::<true>(src, &feat, &win, [&win.taps, &win.flip], i, cx, cy, ca, sa, f32::INFINITY);
+            assert_eq!((generic_pair.0.to_bits(), generic_pair.1.to_bits()), (ea.to_bits(), ef.to_bits()));
+            let slow_flip = patch_error_reference(src, &feat, &tgt, query, i, cx, cy, -ca, -sa, true);
+            assert!(((ef as f64) - slow_flip).abs() <= 1e-4 * slow_flip.max(1.0), "{ef} vs {slow_flip}");
+            // The pair stops only once both sums are above the bound.
+            let bound = ea.min(ef) * 0.5;
+            let (pa, pf) = patch_error_pair(src, &feat, &win, i, cx, cy, ca, sa, bound);
+            assert!(pa > bound && pf > bound && pa <= ea + 1e-3 && pf <= ef + 1e-3);
             // Early termination: a bound below the true error returns something above the bound.
             let bound = fast * 0.3;
             let partial = patch_error(src, &feat, &win, i, cx, cy, c, s, flip, bound);

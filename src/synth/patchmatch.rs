@@ -10,7 +10,7 @@
 
 use super::nnf::{Match, Nnf, aligning_rotation};
 use super::params::{HALF, PATCH, Params};
-use super::patch::{Query, Window, patch_error};
+use super::patch::{Query, Window, patch_error, patch_error_pair};
 use super::rng::Rng;
 use super::source::{Feat, SourceLevel, VALID, floor_i32};
 use super::target::TargetLevel;
@@ -215,12 +215,24 @@ impl<'a> Ctx<'a> {
             Some(f) => ([self.rotation_like(q, s_dir, f); 2], 1),
             None => self.rotations(q, s_dir),
         };
-        for &(c, s, flip) in &opts[..n] {
-            stats.evaluations += 1;
-            let e = patch_error(self.src, self.feat, win, i, x, y, c, s, flip, best.err);
+        let keep = |best: &mut Match, (c, s, flip): (f32, f32, bool), e: f32| {
             if e < best.err {
                 *best = Match { x, y, c, s, err: e, i: i as u16, flip, ok: true };
             }
+        };
+        if n == 2 {
+            // Both options of the rule (M and −M flipped) read the same 25 source pixels: one
+            // pass gives both errors. The aligned one wins ties, as if tried first.
+            stats.evaluations += 2;
+            let (c, s, _) = opts[0];
+            let (ea, ef) = patch_error_pair(self.src, self.feat, win, i, x, y, c, s, best.err);
+            keep(best, opts[0], ea);
+            keep(best, opts[1], ef);
+        } else {
+            stats.evaluations += 1;
+            let (c, s, flip) = opts[0];
+            let e = patch_error(self.src, self.feat, win, i, x, y, c, s, flip, best.err);
+            keep(best, opts[0], e);
         }
     }
 
