@@ -79,7 +79,6 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
             (&mut st.shift, s.shift),
             (&mut st.vote, s.vote),
             (&mut st.occurrence, s.occurrence),
-            (&mut st.refresh, s.refresh),
             (&mut st.patchmatch, s.patchmatch),
             (&mut st.init, s.init),
         ] {
@@ -115,9 +114,8 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     let lv: Vec<String> = levels.iter().rev().enumerate().map(|(l, d)| format!("L{} {:.3}", l, per(*d))).collect();
     println!("per level (finest = L0), s/frame: {}", lv.join(", "));
     println!(
-        "per stage, s/frame: patchmatch {:.3}, refresh {:.3}, occurrence {:.3}, vote {:.3}, init/merge {:.3}, shift {:.3}, target layout {:.3}",
+        "per stage, s/frame: patchmatch {:.3}, occurrence {:.3}, vote {:.3}, init/merge {:.3}, shift {:.3}, target layout {:.3}",
         per(st.patchmatch),
-        per(st.refresh),
         per(st.occurrence),
         per(st.vote),
         per(st.init),

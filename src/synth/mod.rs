@@ -224,9 +224,8 @@ pub struct StageTimes {
     pub vote: Duration,
     /// The occurrence map Ω.
     pub occurrence: Duration,
-    /// Recomputing the errors of the current field.
-    pub refresh: Duration,
-    /// PatchMatch sweeps (propagation and random search).
+    /// PatchMatch sweeps (the errors of the current field recomputed, propagation and random
+    /// search).
     pub patchmatch: Duration,
     /// UPSCALENNF, MERGENNF and initialization.
     pub init: Duration,
@@ -408,8 +407,7 @@ impl Synthesizer {
                     if !had_prev {
                         // First frame: random field, then one guide-only PatchMatch pass (thesis §4.2).
                         let ctx = Ctx { w_col: 0.0, ..ctx };
-                        timed(&mut st.refresh, || patchmatch::refresh_errors(&ctx, &mut f));
-                        evaluations += timed(&mut st.patchmatch, || patchmatch::sweep(&ctx, &mut f, 0)).evaluations;
+                        evaluations += timed(&mut st.patchmatch, || patchmatch::sweep(&ctx, &mut f, 0)).0.evaluations;
                     }
                     f
                 }
@@ -447,11 +445,9 @@ impl Synthesizer {
                         let omega =
                             timed(&mut st.occurrence, || occurrence::penalty(sl, &field, &tgt, p.occ_radius, p.lambda));
                         let ctx = Ctx::new(sl, &tgt, omega.as_ref(), p.w_color, p, keys(opt as u64));
-                        timed(&mut st.refresh, || patchmatch::refresh_errors(&ctx, &mut field));
-                        energy.push((l, mean_err(&field)));
-                        evaluations += tgt.active.len() as u64;
-                        evaluations +=
-                            timed(&mut st.patchmatch, || patchmatch::sweep(&ctx, &mut field, it)).evaluations;
+                        let (stats, e) = timed(&mut st.patchmatch, || patchmatch::sweep(&ctx, &mut field, it));
+                        energy.push((l, e));
+                        evaluations += stats.evaluations;
                     }
                     energy.push((l, mean_err(&field)));
                     let voted = timed(&mut st.vote, || vote::vote(sl, &field, paper, p.vote_sigma));

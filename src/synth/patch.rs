@@ -79,27 +79,65 @@ impl Window {
         w[OMEGA_LANE] = q.w_om;
         // The reflected window swaps ext± on the target side, which needs equal weights.
         debug_assert_eq!(w[4], w[5]);
-        let mut taps = [[0.0f32; LANES]; PATCH * PATCH];
-        let mut base = [0.0f32; LANES];
         let top = q.tq - HALF - HALF * tgt.stride;
-        for row in 0..PATCH {
-            let at = top + row * tgt.stride;
-            let (cur, prev) = (&tgt.cur[at..at + PATCH], &tgt.prev[at..at + PATCH]);
-            for ((m, t), p) in taps[row * PATCH..(row + 1) * PATCH].iter_mut().zip(cur).zip(prev) {
-                for k in 0..LANES {
-                    let d = p[k] - t[k];
-                    m[k] = t[k] + beta[k] * d;
-                    base[k] += gamma[k] * d * d;
-                }
+        let (cur, prev) = (&tgt.cur[top..], &tgt.prev[top..]);
+        assert!(cur.len() > (PATCH - 1) * tgt.stride + PATCH - 1 && prev.len() == cur.len());
+        let mut win = Window { taps: [[0.0; LANES]; PATCH * PATCH], flip: [[0.0; LANES]; PATCH * PATCH], w, base: 0.0 };
+        #[cfg(target_arch = "x86_64")]
+        {
+            if has_avx2() {
+                // SAFETY: the CPU supports AVX2 (checked above); the body is the same safe code.
+                unsafe { gather_avx2(&mut win, cur, prev, tgt.stride, beta, gamma) };
+                return win;
             }
         }
-        let flip = std::array::from_fn(|k| {
-            let mut t = taps[PATCH * PATCH - 1 - k];
-            t.swap(4, 5);
-            t
-        });
-        Window { taps, flip, w, base: base.iter().sum() }
+        gather(&mut win, cur, prev, tgt.stride, beta, gamma);
+        win
     }
+}
+
+/// Fills the taps of `win` from the n × n block of `cur` / `prev` (rows `stride` apart)
+/// starting at index 0, and the temporal base.
+#[inline(always)]
+fn gather(
+    win: &mut Window,
+    cur: &[[f32; LANES]],
+    prev: &[[f32; LANES]],
+    stride: usize,
+    beta: [f32; LANES],
+    gamma: [f32; LANES],
+) {
+    let mut base = [0.0f32; LANES];
+    for row in 0..PATCH {
+        let at = row * stride;
+        let (cur, prev) = (&cur[at..at + PATCH], &prev[at..at + PATCH]);
+        for a in 0..PATCH {
+            let (t, p) = (&cur[a], &prev[a]);
+            let d: [f32; LANES] = std::array::from_fn(|k| p[k] - t[k]);
+            let m: [f32; LANES] = std::array::from_fn(|k| t[k] + beta[k] * d[k]);
+            for k in 0..LANES {
+                base[k] += gamma[k] * d[k] * d[k];
+            }
+            let j = row * PATCH + a;
+            win.taps[j] = m;
+            win.flip[PATCH * PATCH - 1 - j] = [m[0], m[1], m[2], m[3], m[5], m[4], m[6], m[7]];
+        }
+    }
+    win.base = base.iter().sum();
+}
+
+/// [`gather`] compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn gather_avx2(
+    win: &mut Window,
+    cur: &[[f32; LANES]],
+    prev: &[[f32; LANES]],
+    stride: usize,
+    beta: [f32; LANES],
+    gamma: [f32; LANES],
+) {
+    gather(win, cur, prev, stride, beta, gamma)
 }
 
 /// D for source center (cx, cy) of frame `i` with rotation M = (c, s) against target window

@@ -148,11 +148,6 @@ impl<'a> Ctx<'a> {
         }
     }
 
-    /// Full error of match `m` at target pixel q (∞ when its center is not usable).
-    pub fn error_of(&self, q: usize, m: &Match) -> f32 {
-        self.error_in(&self.window(q), m)
-    }
-
     /// Full error of match `m` against the target window `win` (∞ when its center is not
     /// usable).
     pub fn error_in(&self, win: &Window, m: &Match) -> f32 {
@@ -236,8 +231,9 @@ impl<'a> Ctx<'a> {
         }
     }
 
-    /// Improves the match of pixel q: propagation from the two already-visited neighbours
-    /// (`n1`, `n2`, with the offsets `e1`, `e2` from them to q), then random search.
+    /// Improves the match of pixel q: its error recomputed (stored in `refreshed`), then
+    /// propagation from the two already-visited neighbours (`n1`, `n2`, with the offsets `e1`,
+    /// `e2` from them to q), then random search.
     #[allow(clippy::too_many_arguments)]
     fn improve(
         &self,
@@ -249,10 +245,14 @@ impl<'a> Ctx<'a> {
         e2: (f32, f32),
         rng: &mut Rng,
         stats: &mut Stats,
+        refreshed: &mut f32,
     ) -> Match {
         let win = self.window(q);
         let seg = self.wanted_segment(q);
-        let mut best = cur;
+        // The current match's error under this context (the target estimate and Ω change
+        // between sweeps), from the window the search uses anyway.
+        let mut best = Match { err: self.error_in(&win, &cur), ..cur };
+        *refreshed = best.err;
         for (n, e) in [(n1, e1), (n2, e2)] {
             let Some(n) = n else { continue };
             if !n.ok {
@@ -318,31 +318,23 @@ const MAX_RANDOM: usize = 40;
 /// How many candidates ahead of the evaluation the random search prefetches.
 const AHEAD: usize = 2;
 
-/// Recomputes the error of every match (after the target estimate or Ω changed).
-pub(crate) fn refresh_errors(ctx: &Ctx, nnf: &mut Nnf) {
-    let w = nnf.w;
-    nnf.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-        for (x, m) in row.iter_mut().enumerate() {
-            if m.ok {
-                m.err = ctx.error_of(y * w + x, m);
-            }
-        }
-    });
-}
-
-/// One PatchMatch sweep (`iter` even: forward scan; odd: backward).
-pub(crate) fn sweep(ctx: &Ctx, nnf: &mut Nnf, iter: usize) -> Stats {
+/// One PatchMatch sweep (`iter` even: forward scan; odd: backward). The errors stored in the
+/// field are not trusted (the target estimate or Ω may have changed): each pixel's is
+/// recomputed first. Returns the statistics and the energy before the sweep, the mean of those
+/// recomputed errors over the pixels with a usable match.
+pub(crate) fn sweep(ctx: &Ctx, nnf: &mut Nnf, iter: usize) -> (Stats, f64) {
     let (w, h) = (nnf.w, nnf.h);
     let snapshot = nnf.data.clone();
     let forward = iter.is_multiple_of(2);
     let step: isize = if forward { 1 } else { -1 };
     let active: Vec<bool> = ctx.tgt.info.iter().map(|i| i.flags & VALID != 0).collect();
-    let stats: Vec<Stats> = nnf
+    let stats: Vec<(Stats, f64, u64)> = nnf
         .data
         .par_chunks_mut(TILE_ROWS * w)
         .enumerate()
         .map(|(tile, chunk)| {
             let mut stats = Stats::default();
+            let (mut energy, mut scored) = (0.0f64, 0u64);
             let y0 = tile * TILE_ROWS;
             let rows = chunk.len() / w;
             let get = |chunk: &[Match], x: isize, y: isize| -> Option<Match> {
@@ -367,12 +359,21 @@ pub(crate) fn sweep(ctx: &Ctx, nnf: &mut Nnf, iter: usize) -> Stats {
                         Rng::keyed(&[ctx.keys[0], ctx.keys[1], ctx.keys[2], ctx.keys[3], iter as u64, q as u64]);
                     let cur = chunk[(y - y0) * w + x];
                     let e = step as f32;
-                    let new = ctx.improve(q, cur, n1, (e, 0.0), n2, (0.0, e), &mut rng, &mut stats);
+                    let mut refreshed = f32::INFINITY;
+                    let new = ctx.improve(q, cur, n1, (e, 0.0), n2, (0.0, e), &mut rng, &mut stats, &mut refreshed);
+                    if cur.ok && refreshed.is_finite() {
+                        energy += refreshed as f64;
+                        scored += 1;
+                    }
                     chunk[(y - y0) * w + x] = new;
                 }
             }
-            stats
+            (stats, energy, scored)
         })
         .collect();
-    Stats { evaluations: stats.iter().map(|s| s.evaluations).sum() }
+    let evaluations = stats.iter().map(|s| s.0.evaluations).sum::<u64>();
+    let (energy, scored) = stats.iter().fold((0.0, 0), |(e, n), s| (e + s.1, n + s.2));
+    // The refresh is one full evaluation per pixel.
+    let active = active.iter().filter(|&&a| a).count() as u64;
+    (Stats { evaluations: evaluations + active }, if scored > 0 { energy / scored as f64 } else { 0.0 })
 }
