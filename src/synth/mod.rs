@@ -396,6 +396,8 @@ impl Synthesizer {
                 None
             };
             let finest_vote_only = l == 0 && levels > 1 && !p.optimize_finest;
+            // The occurrence map's buffers, kept through the level's iterations.
+            let mut occ = occurrence::Occurrence::new();
             // Initialization.
             let mut field = match nnf.take() {
                 None => {
@@ -428,9 +430,9 @@ impl Synthesizer {
                         let omega = if finest_vote_only {
                             None
                         } else {
-                            timed(&mut st.occurrence, || occurrence::penalty(sl, &up, &tgt, p.occ_radius, p.lambda))
+                            timed(&mut st.occurrence, || occ.update(sl, &up, &tgt, p.occ_radius, p.lambda))
                         };
-                        let ctx = Ctx::new(sl, &tgt, omega.as_ref(), p.w_color, p, keys(0));
+                        let ctx = Ctx::new(sl, &tgt, omega, p.w_color, p, keys(0));
                         timed(&mut st.init, || merge(&ctx, &mut up, &pd));
                         evaluations += 2 * tgt.active.len() as u64;
                     }
@@ -443,8 +445,8 @@ impl Synthesizer {
                 for opt in 0..p.opt_iters_at(from_coarsest) {
                     for it in 0..p.pm_iters_at(from_coarsest) {
                         let omega =
-                            timed(&mut st.occurrence, || occurrence::penalty(sl, &field, &tgt, p.occ_radius, p.lambda));
-                        let ctx = Ctx::new(sl, &tgt, omega.as_ref(), p.w_color, p, keys(opt as u64));
+                            timed(&mut st.occurrence, || occ.update(sl, &field, &tgt, p.occ_radius, p.lambda));
+                        let ctx = Ctx::new(sl, &tgt, omega, p.w_color, p, keys(opt as u64));
                         let (stats, e) = timed(&mut st.patchmatch, || patchmatch::sweep(&ctx, &mut field, it));
                         energy.push((l, e));
                         evaluations += stats.evaluations;

@@ -2,10 +2,13 @@
 //! of the current field cover each exemplar voxel (i, x, y), and the uniformity penalty
 //! `Ω(p′) = Ω*(p′)/(n²·ω*)` with `ω* = n²(2r+1)·|T_seg|/|S_seg|` per segment.
 //!
-//! Boxes are accumulated with +1/−1 markers along time and one prefix sum, so each target
-//! pixel costs n² updates whatever r is. Each thread counts a part of the target into its own
-//! array and the arrays are added: integer sums do not depend on the order (deterministic for
-//! any thread count).
+//! Each matched pixel splats its rotated n × n window into its own frame i only (n² updates
+//! whatever r is); the box along time is a running sum over 2r + 1 frames. Each thread splats
+//! a part of the target into its own array and the arrays are added: integer sums do not depend
+//! on the order (deterministic for any thread count). The splat arrays and the features
+//! carrying the penalty are kept for the whole level ([`Occurrence`]); one parallel pass over
+//! the exemplar's pixels adds the parts, runs the sum along time, writes the penalty and clears
+//! the arrays for the next update.
 
 use super::nnf::{Nnf, offsets};
 use super::params::PATCH;
@@ -13,66 +16,105 @@ use super::source::{FLAG_LANE, Feat, IN_MASK, INTERIOR, OMEGA_LANE, PAD, SourceL
 use super::target::TargetLevel;
 use rayon::prelude::*;
 
-/// Raw counts Ω*(i, x, y) in the padded source layout.
+/// Adds the rotated n × n window of every matched in-mask pixel of `nnf`, in its own frame,
+/// into `marks` (one zeroed array of the level's padded size per part of the target).
+fn mark(src: &SourceLevel, nnf: &Nnf, tgt: &TargetLevel, marks: &mut [Vec<i32>]) {
+    let rows = (src.frame_len / src.stride) as i32;
+    let per = tgt.active.len().div_ceil(marks.len()).max(1);
+    marks.par_iter_mut().zip(tgt.active.par_chunks(per)).for_each(|(hits, chunk)| {
+        for &q in chunk {
+            let q = q as usize;
+            if tgt.info[q].flags & IN_MASK == 0 {
+                continue;
+            }
+            let m = &nnf.data[q];
+            if !m.ok {
+                continue;
+            }
+            let frame = &mut hits[m.i as usize * src.frame_len..(m.i as usize + 1) * src.frame_len];
+            for (a, b) in offsets() {
+                let (dx, dy) = m.rotate(a as f32, b as f32);
+                let px = floor_i32(m.x + dx + PAD as f32 + 0.5);
+                let py = floor_i32(m.y + dy + PAD as f32 + 0.5);
+                if px < 0 || py < 0 || px >= src.stride as i32 || py >= rows {
+                    continue;
+                }
+                frame[py as usize * src.stride + px as usize] += 1;
+            }
+        }
+    });
+}
+
+/// Turns the splats of one column of pixels (`parts[p][i]`: part p, frame i, the same pixels
+/// in every frame) into counts Ω* = the sum over frames i − r ..= i + r, handing each frame's
+/// counts to `out(i, counts)`, and clears the splats.
+fn box_sum(parts: &mut [Vec<&mut [i32]>], r: usize, mut out: impl FnMut(usize, &[i32])) {
+    let frames = parts.first().map_or(0, |p| p.len());
+    let len = parts.first().and_then(|p| p.first()).map_or(0, |f| f.len());
+    let (first, rest) = parts.split_first_mut().expect("at least one part");
+    // Frame j's splats summed over the parts into the first part (the others cleared), and
+    // added to the running sum.
+    fn add(first: &mut [&mut [i32]], rest: &mut [Vec<&mut [i32]>], j: usize, run: &mut [i32]) {
+        for part in rest.iter_mut() {
+            for (a, b) in first[j].iter_mut().zip(part[j].iter_mut()) {
+                *a += std::mem::take(b);
+            }
+        }
+        for (s, &v) in run.iter_mut().zip(first[j].iter()) {
+            *s += v;
+        }
+    }
+    let mut run = vec![0i32; len];
+    for j in 0..r.min(frames) {
+        add(first, rest, j, &mut run);
+    }
+    for i in 0..frames {
+        if i + r < frames {
+            add(first, rest, i + r, &mut run);
+        }
+        out(i, &run);
+        if i >= r {
+            for (s, v) in run.iter_mut().zip(first[i - r].iter_mut()) {
+                *s -= std::mem::take(v);
+            }
+        }
+    }
+    for j in frames.saturating_sub(r)..frames {
+        first[j].fill(0);
+    }
+}
+
+/// Splits `arrays` (each `frames` frames of `frame_len`) into columns of `per` pixels:
+/// `columns[c][a][i]` is array a's frame i, pixels `c·per ..`.
+fn columns<'a, T>(arrays: impl IntoIterator<Item = &'a mut [T]>, frame_len: usize, per: usize) -> Vec<Vec<Vec<&'a mut [T]>>> {
+    let mut cols: Vec<Vec<Vec<&mut [T]>>> = (0..frame_len.div_ceil(per)).map(|_| Vec::new()).collect();
+    for array in arrays {
+        for col in cols.iter_mut() {
+            col.push(Vec::new());
+        }
+        for frame in array.chunks_mut(frame_len) {
+            for (c, piece) in frame.chunks_mut(per).enumerate() {
+                cols[c].last_mut().expect("pushed above").push(piece);
+            }
+        }
+    }
+    cols
+}
+
+/// How many parts the target is marked in (one marker array each).
+fn parts() -> usize {
+    rayon::current_num_threads().clamp(1, 8)
+}
+
+/// Raw counts Ω*(i, x, y) in the padded source layout (for the debug view).
 pub(crate) fn counts(src: &SourceLevel, nnf: &Nnf, tgt: &TargetLevel, r: usize) -> Vec<i32> {
     let len = src.feat.len();
-    let frames = src.frames;
-    let rows = (src.frame_len / src.stride) as i32;
-    // One plain (non-atomic) array of +1/−1 markers per part of the target, summed after:
-    // integer sums do not depend on the order, so the counts are the same for any split.
-    let parts = rayon::current_num_threads().clamp(1, 8);
-    let per = tgt.active.len().div_ceil(parts).max(1);
-    let marks: Vec<Vec<i32>> = tgt
-        .active
-        .par_chunks(per)
-        .map(|chunk| {
-            let mut delta = vec![0i32; len];
-            for &q in chunk {
-                let q = q as usize;
-                if tgt.info[q].flags & IN_MASK == 0 {
-                    continue;
-                }
-                let m = &nnf.data[q];
-                if !m.ok {
-                    continue;
-                }
-                let i = m.i as usize;
-                let lo = i.saturating_sub(r) * src.frame_len;
-                let hi = (i + r + 1 < frames).then_some((i + r + 1) * src.frame_len);
-                for (a, b) in offsets() {
-                    let (dx, dy) = m.rotate(a as f32, b as f32);
-                    let px = floor_i32(m.x + dx + PAD as f32 + 0.5);
-                    let py = floor_i32(m.y + dy + PAD as f32 + 0.5);
-                    if px < 0 || py < 0 || px >= src.stride as i32 || py >= rows {
-                        continue;
-                    }
-                    let pix = py as usize * src.stride + px as usize;
-                    delta[lo + pix] += 1;
-                    if let Some(hi) = hi {
-                        delta[hi + pix] -= 1;
-                    }
-                }
-            }
-            delta
-        })
-        .collect();
-    let mut parts = marks.into_iter();
-    let mut out = parts.next().unwrap_or_else(|| vec![0; len]);
-    for other in parts {
-        out.par_chunks_mut(1 << 16).zip(other.par_chunks(1 << 16)).for_each(|(o, p)| {
-            for (o, p) in o.iter_mut().zip(p) {
-                *o += *p;
-            }
-        });
-    }
-    // Prefix sum along time, per pixel.
+    let mut marks = vec![vec![0i32; len]; parts()];
+    mark(src, nnf, tgt, &mut marks);
+    let mut out = vec![0i32; len];
     let fl = src.frame_len;
-    for i in 1..frames {
-        let (done, rest) = out.split_at_mut(i * fl);
-        let prev = &done[(i - 1) * fl..];
-        for (o, p) in rest[..fl].iter_mut().zip(prev) {
-            *o += *p;
-        }
+    for mut parts in columns(marks.iter_mut().map(|m| &mut m[..]), fl, fl) {
+        box_sum(&mut parts, r, |i, run| out[i * fl..][..run.len()].copy_from_slice(run));
     }
     out
 }
@@ -81,49 +123,172 @@ pub(crate) fn counts(src: &SourceLevel, nnf: &Nnf, tgt: &TargetLevel, r: usize) 
 /// as uniform use would, Ω* = ω*) are clamped when stored in the features' occurrence lane.
 pub(crate) const OMEGA_CAP: f32 = 32.0;
 
-/// The exemplar features of this level with the penalty `λ·Ω*(p′)/(n²·ω*_seg)` of each source
-/// voxel written into the occurrence lane ([`OMEGA_LANE`]), where the segment is the voxel's own
-/// (matches never cross segments), and the lane's weight `w_Ω`. `None` when λ = 0.
+/// The occurrence map of one pyramid level, kept across its PatchMatch iterations: the
+/// level's exemplar features with the penalty `λ·Ω*(p′)/(n²·ω*_seg)` of each source voxel in
+/// the occurrence lane ([`OMEGA_LANE`]), where the segment is the voxel's own (matches never
+/// cross segments), and the lane's weight `w_Ω`.
 ///
 /// The lane holds `q = round(√(penalty / w_Ω))` with `w_Ω = OMEGA_CAP·λ/n² / 255²`, so that the
 /// patch error's `w_Ω·(q − 0)²` is the penalty: uniform use (Ω* = ω*) gives q ≈ 45, a step of
 /// ≈ 4 % there and finer below; penalties above [`OMEGA_CAP`] times that are clamped.
 /// Keeping Ω in the 8-byte pixel the error reads anyway halves the cache lines a random
 /// candidate touches.
-pub(crate) fn penalty(
-    src: &SourceLevel,
-    nnf: &Nnf,
-    tgt: &TargetLevel,
-    r: usize,
-    lambda: f32,
-) -> Option<(Vec<Feat>, f32)> {
-    if lambda == 0.0 {
-        return None;
+pub(crate) struct Occurrence {
+    /// The level's features with the occurrence lane (empty until the first update).
+    feat: Vec<Feat>,
+    /// Zeroed marker arrays, one per part of the target.
+    marks: Vec<Vec<i32>>,
+}
+
+impl Occurrence {
+    /// Buffers for one level (allocated at the first update).
+    pub fn new() -> Occurrence {
+        Occurrence { feat: Vec::new(), marks: Vec::new() }
     }
-    let counts = counts(src, nnf, tgt, r);
-    let n2 = (PATCH * PATCH) as f32;
-    let w_omega = OMEGA_CAP * lambda / n2 / (255.0 * 255.0);
-    // (q/255)² = penalty/(OMEGA_CAP·λ/n²) = Ω*/(OMEGA_CAP·ω*), so q = 255·√(Ω* · k_seg).
-    let k: [f32; 2] = std::array::from_fn(|seg| {
-        let t = tgt.seg_count[seg] as f32;
-        let s = src.seg_count[seg] as f32;
-        if t > 0.0 && s > 0.0 {
-            // 1/(OMEGA_CAP·ω*) with ω* = n²(2r+1)|T|/|S|
-            s / (OMEGA_CAP * n2 * (2 * r + 1) as f32 * t)
-        } else {
-            0.0
+
+    /// Recomputes the penalty of level `src` for the field `nnf` (r = `r`, λ = `lambda`);
+    /// returns the features with the occurrence lane and `w_Ω`, `None` when λ = 0.
+    pub fn update(
+        &mut self,
+        src: &SourceLevel,
+        nnf: &Nnf,
+        tgt: &TargetLevel,
+        r: usize,
+        lambda: f32,
+    ) -> Option<(&[Feat], f32)> {
+        if lambda == 0.0 {
+            return None;
         }
-    });
-    let mut feat = src.feat.clone();
-    feat.par_chunks_mut(src.frame_len).zip(counts.par_chunks(src.frame_len)).for_each(|(fr, cr)| {
-        for (f, &c) in fr.iter_mut().zip(cr) {
-            f[OMEGA_LANE] = if c <= 0 {
-                0
+        let len = src.feat.len();
+        if self.feat.len() != len {
+            self.feat = src.feat.clone();
+        }
+        if self.marks.len() != parts() || self.marks.iter().any(|m| m.len() != len) {
+            self.marks = vec![vec![0i32; len]; parts()];
+        }
+        mark(src, nnf, tgt, &mut self.marks);
+        let n2 = (PATCH * PATCH) as f32;
+        let w_omega = OMEGA_CAP * lambda / n2 / (255.0 * 255.0);
+        // (q/255)² = penalty/(OMEGA_CAP·λ/n²) = Ω*/(OMEGA_CAP·ω*), so q = 255·√(Ω* · k_seg).
+        let k: [f32; 2] = std::array::from_fn(|seg| {
+            let t = tgt.seg_count[seg] as f32;
+            let s = src.seg_count[seg] as f32;
+            if t > 0.0 && s > 0.0 {
+                // 1/(OMEGA_CAP·ω*) with ω* = n²(2r+1)|T|/|S|
+                s / (OMEGA_CAP * n2 * (2 * r + 1) as f32 * t)
             } else {
-                let seg = (f[FLAG_LANE] & INTERIOR != 0) as usize;
-                ((255.0 * (c as f32 * k[seg]).sqrt() + 0.5) as u32).min(255) as u8
+                0.0
+            }
+        });
+        // One pass per column of pixels (the same pixel range of every frame): add the parts,
+        // sum along time, write the lane, clear the splats.
+        let fl = src.frame_len;
+        let per = fl.div_ceil(64).max(1);
+        let feat = columns(std::iter::once(&mut self.feat[..]), fl, per);
+        let marks = columns(self.marks.iter_mut().map(|m| &mut m[..]), fl, per);
+        feat.into_par_iter().zip(marks).for_each(|(mut feat, mut parts)| {
+            let feat = &mut feat[0];
+            box_sum(&mut parts, r, |i, run| {
+                for (f, &c) in feat[i].iter_mut().zip(run) {
+                    f[OMEGA_LANE] = if c <= 0 {
+                        0
+                    } else {
+                        let seg = (f[FLAG_LANE] & INTERIOR != 0) as usize;
+                        ((255.0 * (c as f32 * k[seg]).sqrt() + 0.5) as u32).min(255) as u8
+                    };
+                }
+            });
+        });
+        Some((&self.feat, w_omega))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::synth::nnf::Match;
+    use crate::synth::params::Params;
+    use crate::synth::rng::Rng;
+    use crate::synth::source::{MARGIN, SourcePyramid};
+    use crate::synth::tests::{disc_exemplar, disc_guides};
+
+    /// A field of random matches (random rotations and sub-pixel centers, some frames near
+    /// the ends of the sequence) over every active pixel.
+    fn random_field(src: &SourceLevel, tgt: &TargetLevel, seed: u64) -> Nnf {
+        let mut rng = Rng::keyed(&[seed]);
+        let mut nnf = Nnf::new(tgt.w, tgt.info.len() / tgt.w);
+        for &q in &tgt.active {
+            let th = rng.range_f32(-3.1, 3.1);
+            nnf.data[q as usize] = Match {
+                x: rng.range_f32(MARGIN as f32, (src.w - 1 - MARGIN) as f32),
+                y: rng.range_f32(MARGIN as f32, (src.h - 1 - MARGIN) as f32),
+                c: th.cos(),
+                s: th.sin(),
+                err: 0.0,
+                i: rng.below(src.frames) as u16,
+                flip: false,
+                ok: rng.f32() < 0.9,
             };
         }
-    });
-    Some((feat, w_omega))
+        nnf
+    }
+
+    /// Ω* counted the obvious way: every tap of every box, frame by frame.
+    fn brute_counts(src: &SourceLevel, nnf: &Nnf, tgt: &TargetLevel, r: usize) -> Vec<i32> {
+        let mut out = vec![0; src.feat.len()];
+        for &q in &tgt.active {
+            let m = nnf.data[q as usize];
+            if !m.ok || tgt.info[q as usize].flags & IN_MASK == 0 {
+                continue;
+            }
+            for (a, b) in offsets() {
+                let (dx, dy) = m.rotate(a as f32, b as f32);
+                let px = (m.x + dx + PAD as f32 + 0.5).floor() as usize;
+                let py = (m.y + dy + PAD as f32 + 0.5).floor() as usize;
+                let (lo, hi) = ((m.i as usize).saturating_sub(r), (m.i as usize + r).min(src.frames - 1));
+                for i in lo..=hi {
+                    out[i * src.frame_len + py * src.stride + px] += 1;
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn counts_and_penalty_lane_match_a_direct_count() {
+        let params = Params::builder().build().unwrap();
+        let (rgb, g) = disc_exemplar(48, 40, 9, 2);
+        let pyr = SourcePyramid::build(&rgb, &g, &params, 4.0, 1);
+        let src = &pyr.levels[0];
+        let tg = disc_guides(36, 30, glam::Vec2::new(18.0, 15.0), 11.0, 0.5, 2, 5);
+        let tgt = TargetLevel::new(&tg, &pyr.quant, 4.0, None, [1.0; 3]);
+        let lambda = 0.7;
+        let mut occ = Occurrence::new();
+        let fields: Vec<Nnf> = (0..3).map(|k| random_field(src, &tgt, k)).collect();
+        // Updating again with other fields, then with the first: the buffers carry nothing over.
+        // (A radius beyond the sequence covers all of it.)
+        for (nnf, r) in [(&fields[0], 2), (&fields[1], 2), (&fields[2], 12), (&fields[0], 2)] {
+            let want = brute_counts(src, nnf, &tgt, r);
+            assert!(want.iter().filter(|&&c| c > 0).count() > 500);
+            assert_eq!(counts(src, nnf, &tgt, r), want);
+            let (feat, w) = occ.update(src, nnf, &tgt, r, lambda).unwrap();
+            let n2 = (PATCH * PATCH) as f32;
+            assert!((w - OMEGA_CAP * lambda / n2 / (255.0 * 255.0)).abs() < 1e-12);
+            let mut nonzero = 0;
+            for (k, (f, &c)) in feat.iter().zip(&want).enumerate() {
+                // Every other lane is the level's own.
+                assert_eq!(f[..OMEGA_LANE], src.feat[k][..OMEGA_LANE]);
+                let seg = (f[FLAG_LANE] & INTERIOR != 0) as usize;
+                let omega_star = n2 * (2 * r + 1) as f32 * tgt.seg_count[seg] as f32 / src.seg_count[seg] as f32;
+                // w_Ω·q² ≈ λ·Ω*/(n²·ω*), capped at OMEGA_CAP·λ/n².
+                let penalty = (lambda * c as f32 / (n2 * omega_star)).min(OMEGA_CAP * lambda / n2);
+                let stored = w * (f[OMEGA_LANE] as f32).powi(2);
+                let step = w * (2.0 * f[OMEGA_LANE] as f32 + 1.0);
+                assert!((stored - penalty).abs() <= step, "voxel {k}: count {c}, {stored} vs {penalty}");
+                nonzero += (f[OMEGA_LANE] > 0) as usize;
+            }
+            assert_eq!(nonzero, want.iter().filter(|&&c| c > 0).count());
+        }
+        assert!(occ.update(src, &fields[0], &tgt, 2, 0.0).is_none());
+    }
 }

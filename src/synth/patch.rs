@@ -9,7 +9,7 @@
 //! where p′ runs over the window around the sub-pixel source center rotated by θ, and ext±
 //! are swapped when the rotated flows oppose. The occurrence penalty rides in the pixel's
 //! eighth lane as `√(penalty/w_Ω)` against a target lane of 0, so it is one more weighted
-//! squared difference ([`super::occurrence::penalty`]). In this search metric each rotated tap
+//! squared difference ([`super::occurrence::Occurrence`]). In this search metric each rotated tap
 //! reads the nearest exemplar pixel (at most ½ px away); voting samples the rotated windows at
 //! their exact sub-pixel positions, bilinearly, and bicubically for the output
 //! ([`super::vote`]). The direction term `w_dir·|tan(…)|` is dropped as in the thesis's

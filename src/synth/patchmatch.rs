@@ -49,7 +49,7 @@ pub(crate) struct Ctx<'a> {
     pub src: &'a SourceLevel,
     pub tgt: &'a TargetLevel,
     /// The exemplar pixels the search reads: `src.feat`, or a copy of it whose occurrence lane
-    /// holds the current Ω penalty ([`super::occurrence::penalty`]).
+    /// holds the current Ω penalty ([`super::occurrence::Occurrence`]).
     pub feat: &'a [Feat],
     /// Weight w_Ω of the occurrence lane (0 with `src.feat`).
     pub w_om: f32,
@@ -70,17 +70,17 @@ pub struct Stats {
 
 impl<'a> Ctx<'a> {
     /// A search context; `omega` is the features with the occurrence lane filled and its
-    /// weight ([`super::occurrence::penalty`]), `None` to search without the occurrence term.
+    /// weight ([`super::occurrence::Occurrence`]), `None` to search without the occurrence term.
     pub fn new(
         src: &'a SourceLevel,
         tgt: &'a TargetLevel,
-        omega: Option<&'a (Vec<Feat>, f32)>,
+        omega: Option<(&'a [Feat], f32)>,
         w_col: f32,
         params: &'a Params,
         keys: [u64; 4],
     ) -> Self {
         let (feat, w_om) = match omega {
-            Some((feat, w)) => (&feat[..], *w),
+            Some((feat, w)) => (feat, w),
             None => (&src.feat[..], 0.0),
         };
         Ctx { src, tgt, feat, w_om, w_col, params, keys }
@@ -278,6 +278,11 @@ impl<'a> Ctx<'a> {
         let mut cands = [(0u32, 0u16, 0u16, 0u16); MAX_RANDOM];
         let mut n = 0usize;
         let mut draws = 0;
+        // The last three accepted indices (small windows repeat candidates; an evaluation of the
+        // same one gains nothing).
+        let mut recent = [u32::MAX; 3];
+        // Branch-free: whether a draw is kept is data the CPU cannot predict, so every draw is
+        // written and only the kept ones advance `n`.
         while (sx >= 1.0 || sy >= 1.0) && draws < MAX_RANDOM {
             draws += 1;
             let (ox, oy, oi) = (rng.range_f32(-sx, sx), rng.range_f32(-sy, sy), rng.range_f32(-si, si));
@@ -285,17 +290,18 @@ impl<'a> Ctx<'a> {
             let x = floor_i32(v0.x + ox + 0.5);
             let y = floor_i32(v0.y + oy + 0.5);
             let i = floor_i32(v0.i as f32 + oi + 0.5).clamp(0, last);
-            if x < 0 || y < 0 || x >= src.w as i32 || y >= src.h as i32 {
-                continue;
-            }
-            let idx = src.index(i as usize, x as usize, y as usize);
-            // Small windows repeat candidates; an evaluation of the same one gains nothing.
-            if !src.is_valid(seg, idx) || cands[n.saturating_sub(3)..n].iter().any(|c| c.0 as usize == idx) {
-                continue;
-            }
+            // Negative coordinates wrap to large unsigned ones.
+            let inside = (x as u32) < src.w as u32 && (y as u32) < src.h as u32;
+            let (x, y) = if inside { (x as usize, y as usize) } else { (0, 0) };
+            let idx = src.index(i as usize, x, y);
             // Indices fit 32 bits and coordinates 16 (the exemplar's size limits).
-            cands[n] = (idx as u32, i as u16, x as u16, y as u16);
-            n += 1;
+            let key = idx as u32;
+            let keep = inside & (key != recent[0]) & (key != recent[1]) & (key != recent[2]) & src.is_valid(seg, idx);
+            cands[n] = (key, i as u16, x as u16, y as u16);
+            if keep {
+                recent = [key, recent[0], recent[1]];
+            }
+            n += keep as usize;
         }
         for c in &cands[..n.min(AHEAD)] {
             self.prefetch(c.0 as usize);

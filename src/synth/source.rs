@@ -6,7 +6,7 @@
 //! [`Quant`] (rgb exactly as in the 8-bit exemplar; `S^df` over [−1, 1]; extents over
 //! [0, max ext]), the pixel's flags ([`FLAG_LANE`]), and the occurrence penalty
 //! ([`OMEGA_LANE`], 0 here; a search writes it into its own copy, see
-//! [`super::occurrence::penalty`]). Target values are kept in the same units but unrounded,
+//! [`super::occurrence::Occurrence`]). Target values are kept in the same units but unrounded,
 //! and the per-lane weights absorb the quantization steps (see [`super::patch`]).
 
 use super::params::{HALF, Params};
@@ -78,7 +78,7 @@ pub(crate) const IN_MASK: u8 = 4;
 /// of equal flows into ±1.4° and cost the identity test 4–6 dB.)
 pub(crate) const FLAG_LANE: usize = 6;
 /// Feature lane holding the occurrence penalty of the voxel, as `√(Ω penalty / w_Ω)` in 8 bits
-/// ([`super::occurrence::penalty`]): the target's lane is 0, so the patch error's weighted
+/// ([`super::occurrence::Occurrence`]): the target's lane is 0, so the patch error's weighted
 /// squared difference of this lane *is* the penalty, with no second array to read.
 pub(crate) const OMEGA_LANE: usize = 7;
 /// ⌊v⌋ for finite `v` in i32 range, without a libm call (saturates outside).
