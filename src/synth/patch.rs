@@ -220,9 +220,11 @@ fn kernel<const PAIR: bool>(
     kernel_generic::<PAIR>(src, feat, win, taps, i, cx, cy, c, s, best)
 }
 
+/// Whether the AVX2 builds of the hot loops may run (the CPU has AVX2, and
+/// `FLUIDYMATION_NO_SIMD` is not set).
 #[cfg(target_arch = "x86_64")]
 #[inline]
-fn has_avx2() -> bool {
+pub(crate) fn has_avx2() -> bool {
     use std::sync::atomic::{AtomicU8, Ordering};
     static STATE: AtomicU8 = AtomicU8::new(0);
     match STATE.load(Ordering::Relaxed) {
