@@ -7,6 +7,8 @@
 //! θ_T − θ_S + π option was chosen: ext+ and ext− are then compared swapped (paper §3.3).
 
 use super::params::HALF;
+use super::source::floor_i32;
+use rayon::prelude::*;
 use glam::Vec2;
 
 /// One entry of the field.
@@ -68,18 +70,17 @@ impl Nnf {
     /// `(x↑, y↑) = 2·(x′, y′) + c + M·((x̂ mod 2, ŷ mod 2) − c)` with c = (½, ½).
     pub fn upscale(&self, w: usize, h: usize) -> Nnf {
         let mut out = Nnf::new(w, h);
-        for y in 0..h {
-            for x in 0..w {
+        out.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+            for (x, o) in row.iter_mut().enumerate() {
                 let (cx, cy) = ((x / 2).min(self.w - 1), (y / 2).min(self.h - 1));
                 let m = self.get(cx, cy);
                 if !m.ok {
                     continue;
                 }
                 let (dx, dy) = m.rotate((x % 2) as f32 - 0.5, (y % 2) as f32 - 0.5);
-                out.data[y * w + x] =
-                    Match { x: 2.0 * m.x + 0.5 + dx, y: 2.0 * m.y + 0.5 + dy, err: f32::INFINITY, ..*m };
+                *o = Match { x: 2.0 * m.x + 0.5 + dx, y: 2.0 * m.y + 0.5 + dy, err: f32::INFINITY, ..*m };
             }
-        }
+        });
         out
     }
 
@@ -100,45 +101,47 @@ impl Nnf {
         let kf = k as f32;
         let center = (kf - 1.0) * 0.5;
         let mut out = Nnf::new(w, h);
-        let mut votes: Vec<((u16, i32, i32), Match)> = Vec::with_capacity(k * k);
-        for y in 0..h {
-            for x in 0..w {
-                votes.clear();
-                for by in 0..k {
-                    for bx in 0..k {
-                        let (fx, fy) = (x * k + bx, y * k + by);
-                        if fx >= self.w || fy >= self.h {
-                            continue;
+        out.data.par_chunks_mut(w).enumerate().for_each_init(
+            || Vec::with_capacity(k * k),
+            |votes: &mut Vec<((u16, i32, i32), Match)>, (y, row)| {
+                for (x, o) in row.iter_mut().enumerate() {
+                    votes.clear();
+                    for by in 0..k {
+                        for bx in 0..k {
+                            let (fx, fy) = (x * k + bx, y * k + by);
+                            if fx >= self.w || fy >= self.h {
+                                continue;
+                            }
+                            let m = self.get(fx, fy);
+                            if !m.ok {
+                                continue;
+                            }
+                            let (dx, dy) = m.rotate(bx as f32 - center, by as f32 - center);
+                            let cx = (m.x - dx - center) / kf;
+                            let cy = (m.y - dy - center) / kf;
+                            let key = (m.i, floor_i32(cx + 0.5), floor_i32(cy + 0.5));
+                            votes.push((key, Match { x: key.1 as f32, y: key.2 as f32, err: f32::INFINITY, ..*m }));
                         }
-                        let m = self.get(fx, fy);
-                        if !m.ok {
-                            continue;
-                        }
-                        let (dx, dy) = m.rotate(bx as f32 - center, by as f32 - center);
-                        let cx = (m.x - dx - center) / kf;
-                        let cy = (m.y - dy - center) / kf;
-                        let key = (m.i, (cx + 0.5).floor() as i32, (cy + 0.5).floor() as i32);
-                        votes.push((key, Match { x: key.1 as f32, y: key.2 as f32, err: f32::INFINITY, ..*m }));
                     }
-                }
-                if votes.is_empty() {
-                    continue;
-                }
-                votes.sort_by_key(|v| v.0);
-                // Mode; ties go to the smallest key (deterministic).
-                let (mut best, mut best_n, mut run_start) = (0usize, 0usize, 0usize);
-                for n in 1..=votes.len() {
-                    if n == votes.len() || votes[n].0 != votes[run_start].0 {
-                        if n - run_start > best_n {
-                            best_n = n - run_start;
-                            best = run_start;
-                        }
-                        run_start = n;
+                    if votes.is_empty() {
+                        continue;
                     }
+                    votes.sort_by_key(|v| v.0);
+                    // Mode; ties go to the smallest key (deterministic).
+                    let (mut best, mut best_n, mut run_start) = (0usize, 0usize, 0usize);
+                    for n in 1..=votes.len() {
+                        if n == votes.len() || votes[n].0 != votes[run_start].0 {
+                            if n - run_start > best_n {
+                                best_n = n - run_start;
+                                best = run_start;
+                            }
+                            run_start = n;
+                        }
+                    }
+                    *o = votes[best].1;
                 }
-                out.data[y * w + x] = votes[best].1;
-            }
-        }
+            },
+        );
         out
     }
 }

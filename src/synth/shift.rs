@@ -47,14 +47,17 @@ pub(crate) fn shift_nnf(
         let base = val(i);
         let mut best = (dt - 0.0).abs();
         let mut best_i = i;
-        let candidates: Box<dyn Iterator<Item = usize>> =
-            if m.flip { Box::new((0..i).rev()) } else { Box::new(i + 1..src.frames) };
-        for k in candidates {
+        let mut consider = |k: usize| {
             let d = (dt - (val(k) - base)).abs();
             if d < best {
                 best = d;
                 best_i = k;
             }
+        };
+        if m.flip {
+            (0..i).rev().for_each(&mut consider);
+        } else {
+            (i + 1..src.frames).for_each(&mut consider);
         }
         *o = Match { i: best_i as u16, err: f32::INFINITY, ..*m };
     });
