@@ -252,6 +252,23 @@ unsafe fn tap_index(fbase: usize, stride: i32, sx: f32, sy: f32) -> usize {
     fbase + (y0 * stride + x0) as usize
 }
 
+/// Tap offsets (a − r, b − r) of the n × n window in row-major order, padded with zeros to a
+/// multiple of 8 for the AVX2 index computation.
+const OFFS: usize = (PATCH * PATCH).div_ceil(8) * 8;
+const TAP_A: [f32; OFFS] = tap_offsets(true);
+const TAP_B: [f32; OFFS] = tap_offsets(false);
+
+const fn tap_offsets(column: bool) -> [f32; OFFS] {
+    let mut out = [0.0f32; OFFS];
+    let mut k = 0;
+    while k < PATCH * PATCH {
+        let v = if column { k % PATCH } else { k / PATCH };
+        out[k] = v as f32 - HALF as f32;
+        k += 1;
+    }
+    out
+}
+
 /// The horizontal sum of 8 lanes in a fixed tree order, `((a0+a4)+(a2+a6)) + ((a1+a5)+(a3+a7))`,
 /// which the AVX2 build computes the same way.
 #[inline(always)]
@@ -282,7 +299,6 @@ unsafe fn kernel_avx2<const PAIR: bool>(
     let (ta, tb) = (taps[0].as_ptr() as *const f32, taps[1].as_ptr() as *const f32);
     // SAFETY: `w` holds 8 floats.
     let w = unsafe { _mm256_loadu_ps(win.w.as_ptr()) };
-    let r = HALF as f32;
     let (px, py) = (cx + PAD as f32, cy + PAD as f32);
     // Two accumulators per error (even and odd columns) halve the chain of dependent additions.
     let mut acc = [_mm256_setzero_ps(); 4];
@@ -296,17 +312,32 @@ unsafe fn kernel_avx2<const PAIR: bool>(
         let a = hsum(_mm256_add_ps(acc[0], acc[1]));
         (a, if PAIR { hsum(_mm256_add_ps(acc[2], acc[3])) } else { a })
     };
+    // The 25 tap indices, 8 at a time: position M·(a, b) around the center in padded
+    // coordinates, `px + (c·a − s·b)` and `py + (s·a + c·b)`, rounded to the nearest pixel as
+    // `tap_index` does (the same operations in the same order).
+    let mut offs = [0i32; OFFS];
+    {
+        let (cv, sv) = (_mm256_set1_ps(c), _mm256_set1_ps(s));
+        let (pxv, pyv, half) = (_mm256_set1_ps(px), _mm256_set1_ps(py), _mm256_set1_ps(0.5));
+        let stride_v = _mm256_set1_epi32(stride);
+        for v in 0..OFFS / 8 {
+            // SAFETY: TAP_A, TAP_B and `offs` hold OFFS values.
+            let (af, bf) = unsafe { (_mm256_loadu_ps(TAP_A[v * 8..].as_ptr()), _mm256_loadu_ps(TAP_B[v * 8..].as_ptr())) };
+            let sx = _mm256_add_ps(pxv, _mm256_sub_ps(_mm256_mul_ps(cv, af), _mm256_mul_ps(sv, bf)));
+            let sy = _mm256_add_ps(pyv, _mm256_add_ps(_mm256_mul_ps(sv, af), _mm256_mul_ps(cv, bf)));
+            let ix = _mm256_cvttps_epi32(_mm256_add_ps(sx, half));
+            let iy = _mm256_cvttps_epi32(_mm256_add_ps(sy, half));
+            let o = _mm256_add_epi32(_mm256_mullo_epi32(iy, stride_v), ix);
+            // SAFETY: as above.
+            unsafe { _mm256_storeu_si256(offs[v * 8..].as_mut_ptr() as *mut __m256i, o) };
+        }
+    }
     for b in 0..PATCH {
-        let bf = b as f32 - r;
         for a in 0..PATCH {
-            let af = a as f32 - r;
-            // Tap position M·(a, b) around the center, in padded coordinates.
-            let sx = px + (c * af - s * bf);
-            let sy = py + (s * af + c * bf);
             // SAFETY (all unchecked accesses below): the padded coordinates are positive and
             // inside frame i's padded block by the validity rule; the windows have n² taps;
             // the CPU has AVX2 (checked by the caller).
-            let idx = unsafe { tap_index(fbase, stride, sx, sy) };
+            let idx = fbase + offs[b * PATCH + a] as usize;
             debug_assert!(idx < feat.len());
             let bytes = unsafe { _mm_loadl_epi64(fp.add(idx) as *const __m128i) };
             let v = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes));
