@@ -232,7 +232,7 @@ impl SourceLevel {
     }
 
     /// Bilinear sample of the rgb lanes at (x, y) of frame i (clamped to the padded frame).
-    #[inline]
+    #[inline(always)]
     pub fn sample_rgb(&self, i: usize, x: f32, y: f32) -> Rgb {
         let px = (x + PAD as f32).clamp(0.0, (self.stride - 2) as f32);
         let py = (y + PAD as f32).clamp(0.0, (self.frame_len / self.stride - 2) as f32);
@@ -254,7 +254,7 @@ impl SourceLevel {
 impl SourceLevel {
     /// Catmull–Rom (bicubic) sample of the rgb lanes at (x, y) of frame i, clamped to 0..=1:
     /// sharper than [`SourceLevel::sample_rgb`] where rotated patches land between pixels.
-    #[inline]
+    #[inline(always)]
     pub fn sample_rgb_cubic(&self, i: usize, x: f32, y: f32) -> Rgb {
         let rows = self.frame_len / self.stride;
         let px = (x + PAD as f32).clamp(1.0, (self.stride - 3) as f32);
