@@ -215,6 +215,18 @@ impl<'a> Ctx<'a> {
                 *best = Match { x, y, c, s, err: e, i: i as u16, flip, ok: true };
             }
         };
+        // A candidate equal to the best match has exactly its error (the error is a function of
+        // the match and the window, and the best's was computed in full), so it cannot win:
+        // propagation in a coherent region proposes the current match itself most of the time.
+        let same = |(c, s, flip): (f32, f32, bool)| {
+            best.ok && best.i as usize == i && best.x == x && best.y == y && best.c == c && best.s == s && best.flip == flip
+        };
+        let (n, opts) = match (n, same(opts[0]), n == 2 && same(opts[1])) {
+            (_, true, false) if n == 1 => return,
+            (2, true, false) => (1, [opts[1]; 2]),
+            (2, false, true) => (1, [opts[0]; 2]),
+            _ => (n, opts),
+        };
         if n == 2 {
             // Both options of the rule (M and −M flipped) read the same 25 source pixels: one
             // pass gives both errors. The aligned one wins ties, as if tried first.
