@@ -444,8 +444,7 @@ impl Synthesizer {
                 write_lanes(&mut tgt, &voted, true);
                 for opt in 0..p.opt_iters_at(from_coarsest) {
                     for it in 0..p.pm_iters_at(from_coarsest) {
-                        let omega =
-                            timed(&mut st.occurrence, || occ.update(sl, &field, &tgt, p.occ_radius, p.lambda));
+                        let omega = timed(&mut st.occurrence, || occ.update(sl, &field, &tgt, p.occ_radius, p.lambda));
                         let ctx = Ctx::new(sl, &tgt, omega, p.w_color, p, keys(opt as u64));
                         let (stats, e) = timed(&mut st.patchmatch, || patchmatch::sweep(&ctx, &mut field, it));
                         energy.push((l, e));

@@ -8,8 +8,8 @@
 
 use super::params::HALF;
 use super::source::floor_i32;
-use rayon::prelude::*;
 use glam::Vec2;
+use rayon::prelude::*;
 
 /// One entry of the field.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -79,14 +79,18 @@ fn box_sum(parts: &mut [Vec<&mut [i32]>], r: usize, mut out: impl FnMut(usize, &
             }
         }
     }
-    for j in frames.saturating_sub(r)..frames {
-        first[j].fill(0);
+    for f in first.iter_mut().skip(frames.saturating_sub(r)) {
+        f.fill(0);
     }
 }
 
 /// Splits `arrays` (each `frames` frames of `frame_len`) into columns of `per` pixels:
 /// `columns[c][a][i]` is array a's frame i, pixels `c·per ..`.
-fn columns<'a, T>(arrays: impl IntoIterator<Item = &'a mut [T]>, frame_len: usize, per: usize) -> Vec<Vec<Vec<&'a mut [T]>>> {
+fn columns<'a, T>(
+    arrays: impl IntoIterator<Item = &'a mut [T]>,
+    frame_len: usize,
+    per: usize,
+) -> Vec<Vec<Vec<&'a mut [T]>>> {
     let mut cols: Vec<Vec<Vec<&mut [T]>>> = (0..frame_len.div_ceil(per)).map(|_| Vec::new()).collect();
     for array in arrays {
         for col in cols.iter_mut() {

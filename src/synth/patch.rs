@@ -322,7 +322,8 @@ unsafe fn kernel_avx2<const PAIR: bool>(
         let stride_v = _mm256_set1_epi32(stride);
         for v in 0..OFFS / 8 {
             // SAFETY: TAP_A, TAP_B and `offs` hold OFFS values.
-            let (af, bf) = unsafe { (_mm256_loadu_ps(TAP_A[v * 8..].as_ptr()), _mm256_loadu_ps(TAP_B[v * 8..].as_ptr())) };
+            let (af, bf) =
+                unsafe { (_mm256_loadu_ps(TAP_A[v * 8..].as_ptr()), _mm256_loadu_ps(TAP_B[v * 8..].as_ptr())) };
             let sx = _mm256_add_ps(pxv, _mm256_sub_ps(_mm256_mul_ps(cv, af), _mm256_mul_ps(sv, bf)));
             let sy = _mm256_add_ps(pyv, _mm256_add_ps(_mm256_mul_ps(sv, af), _mm256_mul_ps(cv, bf)));
             let ix = _mm256_cvttps_epi32(_mm256_add_ps(sx, half));

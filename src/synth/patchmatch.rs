@@ -41,8 +41,15 @@ pub(crate) fn rotation_like(params: &Params, t_dir: Vec2, s_dir: Vec2, flip: boo
     if n == 2 && flip { opts[1] } else { opts[0] }
 }
 
-/// Rows per parallel band.
+/// Rows per parallel band (at most; see [`tile_rows`]).
 pub(crate) const TILE_ROWS: usize = 16;
+
+/// Rows per band for a field of `h` rows: [`TILE_ROWS`], or fewer on small (coarse) fields so
+/// that there are about 16 bands to share among the threads (4 rows at least). It depends only
+/// on `h`, so the result does not depend on the thread count.
+pub(crate) fn tile_rows(h: usize) -> usize {
+    h.div_ceil(16).clamp(4, TILE_ROWS)
+}
 
 /// What one PatchMatch run needs.
 pub(crate) struct Ctx<'a> {
@@ -219,7 +226,13 @@ impl<'a> Ctx<'a> {
         // the match and the window, and the best's was computed in full), so it cannot win:
         // propagation in a coherent region proposes the current match itself most of the time.
         let same = |(c, s, flip): (f32, f32, bool)| {
-            best.ok && best.i as usize == i && best.x == x && best.y == y && best.c == c && best.s == s && best.flip == flip
+            best.ok
+                && best.i as usize == i
+                && best.x == x
+                && best.y == y
+                && best.c == c
+                && best.s == s
+                && best.flip == flip
         };
         let (n, opts) = match (n, same(opts[0]), n == 2 && same(opts[1])) {
             (_, true, false) if n == 1 => return,
@@ -348,12 +361,12 @@ pub(crate) fn sweep(ctx: &Ctx, nnf: &mut Nnf, iter: usize) -> (Stats, f64) {
     let active: Vec<bool> = ctx.tgt.info.iter().map(|i| i.flags & VALID != 0).collect();
     let stats: Vec<(Stats, f64, u64)> = nnf
         .data
-        .par_chunks_mut(TILE_ROWS * w)
+        .par_chunks_mut(tile_rows(h) * w)
         .enumerate()
         .map(|(tile, chunk)| {
             let mut stats = Stats::default();
             let (mut energy, mut scored) = (0.0f64, 0u64);
-            let y0 = tile * TILE_ROWS;
+            let y0 = tile * tile_rows(h);
             let rows = chunk.len() / w;
             let get = |chunk: &[Match], x: isize, y: isize| -> Option<Match> {
                 if x < 0 || y < 0 || x >= w as isize || y >= h as isize {

@@ -45,7 +45,14 @@ pub(crate) fn vote_with(src: &SourceLevel, nnf: &Nnf, fill: Rgb, sigma: f32, cub
 /// [`vote_row`] compiled for AVX2 (the same operations, so the same results).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn vote_row_avx2(src: &SourceLevel, nnf: &Nnf, taps: &[((isize, isize), f32)], y: usize, row: &mut [Rgb], cubic: bool) {
+unsafe fn vote_row_avx2(
+    src: &SourceLevel,
+    nnf: &Nnf,
+    taps: &[((isize, isize), f32)],
+    y: usize,
+    row: &mut [Rgb],
+    cubic: bool,
+) {
     vote_row(src, nnf, taps, y, row, cubic)
 }
 
