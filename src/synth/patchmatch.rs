@@ -3,7 +3,7 @@
 //! by α, matches restricted to valid centers of the target pixel's segment.
 //!
 //! Parallel as in thesis §4.4.2, made deterministic: the field is cut into fixed bands of
-//! [`TILE_ROWS`] rows processed in parallel; inside a band propagation uses the values updated
+//! [`tile_rows`] rows (a function of the field's height only) processed in parallel; inside a band propagation uses the values updated
 //! in this sweep, across band borders it reads the values from before the sweep (propagation
 //! across tiles is delayed one iteration). Random numbers are keyed per pixel and sweep, so the
 //! result does not depend on the thread count.
