@@ -165,7 +165,7 @@ pub(crate) fn patch_error(
 ) -> f32 {
     // The flipped option with M reads the taps of −M against the reflected window.
     let (c, s, taps) = if flip { (-c, -s, &win.flip) } else { (c, s, &win.taps) };
-    kernel::<false>(src, feat, win, [taps, taps], i, cx, cy, c, s, best).0
+    kernel::<false>(src, feat, win, [taps, taps], Center { i, cx, cy, c, s }, best).0
 }
 
 /// Both options of the flow-alignment rule at once: D with rotation M = (c, s) and D with −M
@@ -186,27 +186,33 @@ pub(crate) fn patch_error_pair(
     s: f32,
     best: f32,
 ) -> (f32, f32) {
-    kernel::<true>(src, feat, win, [&win.taps, &win.flip], i, cx, cy, c, s, best)
+    kernel::<true>(src, feat, win, [&win.taps, &win.flip], Center { i, cx, cy, c, s }, best)
 }
 
 /// Target taps of one evaluation.
 type Taps = [[f32; LANES]; PATCH * PATCH];
 
-/// The kernel: with `PAIR`, the errors against `taps[0]` and `taps[1]`, else only the first.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn kernel<const PAIR: bool>(
-    src: &SourceLevel,
-    feat: &[Feat],
-    win: &Window,
-    taps: [&Taps; 2],
+/// A candidate of the kernel: frame i, sub-pixel center (cx, cy), rotation M = (c, s).
+#[derive(Clone, Copy)]
+struct Center {
     i: usize,
     cx: f32,
     cy: f32,
     c: f32,
     s: f32,
+}
+
+/// The kernel: with `PAIR`, the errors against `taps[0]` and `taps[1]`, else only the first.
+#[inline(always)]
+fn kernel<const PAIR: bool>(
+    src: &SourceLevel,
+    feat: &[Feat],
+    win: &Window,
+    taps: [&Taps; 2],
+    at: Center,
     best: f32,
 ) -> (f32, f32) {
+    let Center { cx, cy, .. } = at;
     debug_assert!(cx > -0.5 + super::source::MARGIN as f32 - 0.51 && cy > -0.5 + super::source::MARGIN as f32 - 0.51);
     debug_assert!(cx < (src.w - super::source::MARGIN) as f32 && cy < (src.h - super::source::MARGIN) as f32);
     debug_assert_eq!(feat.len(), src.feat.len());
@@ -214,10 +220,10 @@ fn kernel<const PAIR: bool>(
     {
         if has_avx2() {
             // SAFETY: the CPU supports AVX2 (checked above); the body is the same safe code.
-            return unsafe { kernel_avx2::<PAIR>(src, feat, win, taps, i, cx, cy, c, s, best) };
+            return unsafe { kernel_avx2::<PAIR>(src, feat, win, taps, at, best) };
         }
     }
-    kernel_generic::<PAIR>(src, feat, win, taps, i, cx, cy, c, s, best)
+    kernel_generic::<PAIR>(src, feat, win, taps, at, best)
 }
 
 /// Whether the AVX2 builds of the hot loops may run (the CPU has AVX2, and
@@ -279,19 +285,15 @@ fn tree_sum(a: &[f32; LANES]) -> f32 {
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-#[allow(clippy::too_many_arguments)]
 unsafe fn kernel_avx2<const PAIR: bool>(
     src: &SourceLevel,
     feat: &[Feat],
     win: &Window,
     taps: [&Taps; 2],
-    i: usize,
-    cx: f32,
-    cy: f32,
-    c: f32,
-    s: f32,
+    at: Center,
     best: f32,
 ) -> (f32, f32) {
+    let Center { i, cx, cy, c, s } = at;
     use std::arch::x86_64::*;
     let fp = feat.as_ptr();
     let stride = src.stride as i32;
@@ -358,19 +360,15 @@ unsafe fn kernel_avx2<const PAIR: bool>(
     totals(&acc)
 }
 
-#[allow(clippy::too_many_arguments)]
 fn kernel_generic<const PAIR: bool>(
     src: &SourceLevel,
     feat: &[Feat],
     win: &Window,
     taps: [&Taps; 2],
-    i: usize,
-    cx: f32,
-    cy: f32,
-    c: f32,
-    s: f32,
+    at: Center,
     best: f32,
 ) -> (f32, f32) {
+    let Center { i, cx, cy, c, s } = at;
     let stride = src.stride as i32;
     let fbase = i * src.frame_len;
     let w = &win.w;
@@ -529,7 +527,15 @@ mod tests {
             assert!(((fast as f64) - slow).abs() <= 1e-4 * slow.max(1.0), "{fast} vs {slow}");
             let taps = if flip { &win.flip } else { &win.taps };
             let (gc, gs) = if flip { (-c, -s) } else { (c, s) };
-            let generic = kernel_generic::<false>(src, &feat, &win, [taps, taps], i, cx, cy, gc, gs, f32::INFINITY).0;
+            let generic = kernel_generic::<false>(
+                src,
+                &feat,
+                &win,
+                [taps, taps],
+                Center { i, cx, cy, c: gc, s: gs },
+                f32::INFINITY,
+            )
+            .0;
             assert_eq!(fast.to_bits(), generic.to_bits(), "SIMD and generic builds must agree bit for bit");
             // The pair of options (M, −M flipped) from one pass equals the two evaluations.
             let (ca, sa) = if flip { (-c, -s) } else { (c, s) };
@@ -537,8 +543,14 @@ mod tests {
             let one = patch_error(src, &feat, &win, i, cx, cy, ca, sa, false, f32::INFINITY);
             let other = patch_error(src, &feat, &win, i, cx, cy, -ca, -sa, true, f32::INFINITY);
             assert_eq!((ea.to_bits(), ef.to_bits()), (one.to_bits(), other.to_bits()));
-            let generic_pair =
-                kernel_generic::<true>(src, &feat, &win, [&win.taps, &win.flip], i, cx, cy, ca, sa, f32::INFINITY);
+            let generic_pair = kernel_generic::<true>(
+                src,
+                &feat,
+                &win,
+                [&win.taps, &win.flip],
+                Center { i, cx, cy, c: ca, s: sa },
+                f32::INFINITY,
+            );
             assert_eq!((generic_pair.0.to_bits(), generic_pair.1.to_bits()), (ea.to_bits(), ef.to_bits()));
             let slow_flip = patch_error_reference(src, &feat, &tgt, query, i, cx, cy, -ca, -sa, true);
             assert!(((ef as f64) - slow_flip).abs() <= 1e-4 * slow_flip.max(1.0), "{ef} vs {slow_flip}");
