@@ -59,7 +59,8 @@ pub(crate) struct Window {
     taps: [[f32; LANES]; PATCH * PATCH],
     /// `taps` point-reflected (`flip[k] = taps[n² − 1 − k]`) with lanes ext+ and ext− swapped.
     flip: [[f32; LANES]; PATCH * PATCH],
-    /// Per-lane weights: `[(w_col + m(q)·w_prev)·w_rgb, w_df, w_ext, w_ext, 0, w_Ω]`.
+    /// Per-lane weights: `(w_col + m(q)·w_prev)·w_rgb` for the three color lanes, then `w_df`,
+    /// `w_ext`, `w_ext`, 0 (flags) and `w_Ω`.
     w: [f32; LANES],
     /// The candidate-independent part of the temporal term, Σ a·b/(a + b)·(t − p)².
     base: f32,
@@ -140,7 +141,7 @@ unsafe fn gather_avx2(
     gather(win, cur, prev, stride, beta, gamma)
 }
 
-/// D for source center (cx, cy) of frame `i` with rotation M = (c, s) against target window
+/// D for the source center `at` (frame i, (cx, cy), rotation M = (c, s)) against target window
 /// `win`, reading the exemplar pixels from `feat` (the level's features, or a copy with the
 /// occurrence lane filled); returns a value `> best` (possibly partial) once the running sum
 /// exceeds `best`. `flip` compares ext± swapped (the candidate of the +π option, M = (c, s)
@@ -150,22 +151,10 @@ unsafe fn gather_avx2(
 /// the border), so every tap lies inside the padded frame, and that `feat` has the level's
 /// layout.
 #[inline]
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn patch_error(
-    src: &SourceLevel,
-    feat: &[Feat],
-    win: &Window,
-    i: usize,
-    cx: f32,
-    cy: f32,
-    c: f32,
-    s: f32,
-    flip: bool,
-    best: f32,
-) -> f32 {
+pub(crate) fn patch_error(src: &SourceLevel, feat: &[Feat], win: &Window, at: Center, flip: bool, best: f32) -> f32 {
     // The flipped option with M reads the taps of −M against the reflected window.
-    let (c, s, taps) = if flip { (-c, -s, &win.flip) } else { (c, s, &win.taps) };
-    kernel::<false>(src, feat, win, [taps, taps], Center { i, cx, cy, c, s }, best).0
+    let (at, taps) = if flip { (Center { c: -at.c, s: -at.s, ..at }, &win.flip) } else { (at, &win.taps) };
+    kernel::<false>(src, feat, win, [taps, taps], at, best).0
 }
 
 /// Both options of the flow-alignment rule at once: D with rotation M = (c, s) and D with −M
@@ -174,32 +163,21 @@ pub(crate) fn patch_error(
 /// each value is bit-identical to [`patch_error`]'s when neither stops early. Same contract
 /// as [`patch_error`].
 #[inline]
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn patch_error_pair(
-    src: &SourceLevel,
-    feat: &[Feat],
-    win: &Window,
-    i: usize,
-    cx: f32,
-    cy: f32,
-    c: f32,
-    s: f32,
-    best: f32,
-) -> (f32, f32) {
-    kernel::<true>(src, feat, win, [&win.taps, &win.flip], Center { i, cx, cy, c, s }, best)
+pub(crate) fn patch_error_pair(src: &SourceLevel, feat: &[Feat], win: &Window, at: Center, best: f32) -> (f32, f32) {
+    kernel::<true>(src, feat, win, [&win.taps, &win.flip], at, best)
 }
 
 /// Target taps of one evaluation.
 type Taps = [[f32; LANES]; PATCH * PATCH];
 
 /// A candidate of the kernel: frame i, sub-pixel center (cx, cy), rotation M = (c, s).
-#[derive(Clone, Copy)]
-struct Center {
-    i: usize,
-    cx: f32,
-    cy: f32,
-    c: f32,
-    s: f32,
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Center {
+    pub i: usize,
+    pub cx: f32,
+    pub cy: f32,
+    pub c: f32,
+    pub s: f32,
 }
 
 /// The kernel: with `PAIR`, the errors against `taps[0]` and `taps[1]`, else only the first.
@@ -457,6 +435,12 @@ pub(crate) fn patch_error_reference(
     total
 }
 
+/// A kernel candidate from its parts (tests).
+#[cfg(test)]
+pub(crate) fn at(i: usize, cx: f32, cy: f32, c: f32, s: f32) -> Center {
+    Center { i, cx, cy, c, s }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -522,45 +506,32 @@ mod tests {
             let flip = rng.f32() < 0.5;
             assert!(src.info_at(i, cx, cy).unwrap().1.flags & VALID != 0);
             let win = Window::new(src, &tgt, &query);
-            let fast = patch_error(src, &feat, &win, i, cx, cy, c, s, flip, f32::INFINITY);
+            let fast = patch_error(src, &feat, &win, at(i, cx, cy, c, s), flip, f32::INFINITY);
             let slow = patch_error_reference(src, &feat, &tgt, query, i, cx, cy, c, s, flip);
             assert!(((fast as f64) - slow).abs() <= 1e-4 * slow.max(1.0), "{fast} vs {slow}");
             let taps = if flip { &win.flip } else { &win.taps };
             let (gc, gs) = if flip { (-c, -s) } else { (c, s) };
-            let generic = kernel_generic::<false>(
-                src,
-                &feat,
-                &win,
-                [taps, taps],
-                Center { i, cx, cy, c: gc, s: gs },
-                f32::INFINITY,
-            )
-            .0;
+            let generic =
+                kernel_generic::<false>(src, &feat, &win, [taps, taps], at(i, cx, cy, gc, gs), f32::INFINITY).0;
             assert_eq!(fast.to_bits(), generic.to_bits(), "SIMD and generic builds must agree bit for bit");
             // The pair of options (M, −M flipped) from one pass equals the two evaluations.
             let (ca, sa) = if flip { (-c, -s) } else { (c, s) };
-            let (ea, ef) = patch_error_pair(src, &feat, &win, i, cx, cy, ca, sa, f32::INFINITY);
-            let one = patch_error(src, &feat, &win, i, cx, cy, ca, sa, false, f32::INFINITY);
-            let other = patch_error(src, &feat, &win, i, cx, cy, -ca, -sa, true, f32::INFINITY);
+            let (ea, ef) = patch_error_pair(src, &feat, &win, at(i, cx, cy, ca, sa), f32::INFINITY);
+            let one = patch_error(src, &feat, &win, at(i, cx, cy, ca, sa), false, f32::INFINITY);
+            let other = patch_error(src, &feat, &win, at(i, cx, cy, -ca, -sa), true, f32::INFINITY);
             assert_eq!((ea.to_bits(), ef.to_bits()), (one.to_bits(), other.to_bits()));
-            let generic_pair = kernel_generic::<true>(
-                src,
-                &feat,
-                &win,
-                [&win.taps, &win.flip],
-                Center { i, cx, cy, c: ca, s: sa },
-                f32::INFINITY,
-            );
+            let generic_pair =
+                kernel_generic::<true>(src, &feat, &win, [&win.taps, &win.flip], at(i, cx, cy, ca, sa), f32::INFINITY);
             assert_eq!((generic_pair.0.to_bits(), generic_pair.1.to_bits()), (ea.to_bits(), ef.to_bits()));
             let slow_flip = patch_error_reference(src, &feat, &tgt, query, i, cx, cy, -ca, -sa, true);
             assert!(((ef as f64) - slow_flip).abs() <= 1e-4 * slow_flip.max(1.0), "{ef} vs {slow_flip}");
             // The pair stops only once both sums are above the bound.
             let bound = ea.min(ef) * 0.5;
-            let (pa, pf) = patch_error_pair(src, &feat, &win, i, cx, cy, ca, sa, bound);
+            let (pa, pf) = patch_error_pair(src, &feat, &win, at(i, cx, cy, ca, sa), bound);
             assert!(pa > bound && pf > bound && pa <= ea + 1e-3 && pf <= ef + 1e-3);
             // Early termination: a bound below the true error returns something above the bound.
             let bound = fast * 0.3;
-            let partial = patch_error(src, &feat, &win, i, cx, cy, c, s, flip, bound);
+            let partial = patch_error(src, &feat, &win, at(i, cx, cy, c, s), flip, bound);
             assert!(partial > bound && partial <= fast + 1e-3);
             checked += 1;
         }
@@ -583,9 +554,9 @@ mod tests {
         let feat = src.feat.clone();
         let q = Query { tq: tgt.pindex(16, 16), w_col: 1.0, mw: 0.0, w_om: 0.0 };
         let win = Window::new(src, &tgt, &q);
-        let e = patch_error(src, &feat, &win, 1, 16.0, 16.0, 1.0, 0.0, false, f32::INFINITY);
+        let e = patch_error(src, &feat, &win, at(1, 16.0, 16.0, 1.0, 0.0), false, f32::INFINITY);
         assert!(e < 1e-9, "{e}");
-        let shifted = patch_error(src, &feat, &win, 1, 17.0, 16.0, 1.0, 0.0, false, f32::INFINITY);
+        let shifted = patch_error(src, &feat, &win, at(1, 17.0, 16.0, 1.0, 0.0), false, f32::INFINITY);
         assert!(shifted > 0.1);
     }
 }
@@ -634,7 +605,7 @@ mod speed {
             let t = std::time::Instant::now();
             let mut sum = 0.0;
             for &(i, x, y, c, s, k) in &cands {
-                sum += patch_error(src, &feat, &wins[k], i, x, y, c, s, false, f32::INFINITY);
+                sum += patch_error(src, &feat, &wins[k], at(i, x, y, c, s), false, f32::INFINITY);
             }
             let ns = t.elapsed().as_nanos() as f64 / n as f64;
             println!("{label}: {ns:.1} ns per full evaluation (random access) [{sum}]");
@@ -646,7 +617,7 @@ mod speed {
         for k in 0..n {
             let x = 20.0 + (k % 300) as f32 + 0.3;
             let y = 80.0 + ((k / 300) % 50) as f32;
-            sum += patch_error(src, &feat, &wins[k % 100], 3, x, y, 0.8, 0.6, true, f32::INFINITY);
+            sum += patch_error(src, &feat, &wins[k % 100], at(3, x, y, 0.8, 0.6), true, f32::INFINITY);
         }
         println!("coherent: {:.1} ns [{sum}]", t.elapsed().as_nanos() as f64 / n as f64);
     }
@@ -678,7 +649,7 @@ mod terms {
             edit(&mut tgt);
             let feat = src.feat.clone();
             let q = Query { tq: tgt.pindex(20, 20), w_col: 1.0, mw: params.w_prev, w_om: 0.0 };
-            patch_error(src, &feat, &Window::new(src, &tgt, &q), 1, 20.0, 20.0, 1.0, 0.0, false, f32::INFINITY)
+            patch_error(src, &feat, &Window::new(src, &tgt, &q), at(1, 20.0, 20.0, 1.0, 0.0), false, f32::INFINITY)
         };
         let shift_lane = |lane: usize, by: f32| {
             move |t: &mut TargetLevel| {

@@ -3,14 +3,14 @@
 //! by α, matches restricted to valid centers of the target pixel's segment.
 //!
 //! Parallel as in thesis §4.4.2, made deterministic: the field is cut into fixed bands of
-//! [`tile_rows`] rows (a function of the field's height only) processed in parallel; inside a band propagation uses the values updated
-//! in this sweep, across band borders it reads the values from before the sweep (propagation
-//! across tiles is delayed one iteration). Random numbers are keyed per pixel and sweep, so the
+//! [`tile_rows`] rows (a function of the field's height only) processed in parallel; inside a
+//! band propagation uses the values updated in this sweep, across band borders it reads the
+//! values from before the sweep (propagation across tiles is delayed one iteration). Random numbers are keyed per pixel and sweep, so the
 //! result does not depend on the thread count.
 
 use super::nnf::{Match, Nnf, aligning_rotation};
 use super::params::{HALF, PATCH, Params};
-use super::patch::{Query, Window, patch_error, patch_error_pair};
+use super::patch::{Center, Query, Window, patch_error, patch_error_pair};
 use super::rng::Rng;
 use super::source::{Feat, SourceLevel, VALID, floor_i32};
 use super::target::TargetLevel;
@@ -161,7 +161,8 @@ impl<'a> Ctx<'a> {
         if !m.ok || self.check(None, m.i as usize, m.x, m.y).is_none() {
             return f32::INFINITY;
         }
-        patch_error(self.src, self.feat, win, m.i as usize, m.x, m.y, m.c, m.s, m.flip, f32::INFINITY)
+        let at = Center { i: m.i as usize, cx: m.x, cy: m.y, c: m.c, s: m.s };
+        patch_error(self.src, self.feat, win, at, m.flip, f32::INFINITY)
     }
 
     /// A uniformly random valid match for target pixel q.
@@ -234,31 +235,29 @@ impl<'a> Ctx<'a> {
                 && best.s == s
                 && best.flip == flip
         };
-        let (n, opts) = match (n, same(opts[0]), n == 2 && same(opts[1])) {
-            (_, true, false) if n == 1 => return,
-            (2, true, false) => (1, [opts[1]; 2]),
-            (2, false, true) => (1, [opts[0]; 2]),
-            _ => (n, opts),
-        };
-        if n == 2 {
+        let todo = [!same(opts[0]), n == 2 && !same(opts[1])];
+        if todo == [true, true] {
             // Both options of the rule (M and −M flipped) read the same 25 source pixels: one
             // pass gives both errors. The aligned one wins ties, as if tried first.
             stats.evaluations += 2;
             let (c, s, _) = opts[0];
-            let (ea, ef) = patch_error_pair(self.src, self.feat, win, i, x, y, c, s, best.err);
+            let (ea, ef) = patch_error_pair(self.src, self.feat, win, Center { i, cx: x, cy: y, c, s }, best.err);
             keep(best, opts[0], ea);
             keep(best, opts[1], ef);
-        } else {
+            return;
+        }
+        for (&opt, _) in opts.iter().zip(todo).filter(|&(_, t)| t) {
             stats.evaluations += 1;
-            let (c, s, flip) = opts[0];
-            let e = patch_error(self.src, self.feat, win, i, x, y, c, s, flip, best.err);
-            keep(best, opts[0], e);
+            let (c, s, flip) = opt;
+            let e = patch_error(self.src, self.feat, win, Center { i, cx: x, cy: y, c, s }, flip, best.err);
+            keep(best, opt, e);
         }
     }
 
-    /// Improves the match of pixel q: its error recomputed (stored in `refreshed`), then
-    /// propagation from the two already-visited neighbours (`n1`, `n2`, with the offsets `e1`,
-    /// `e2` from them to q), then random search.
+    /// Improves the match of pixel q: its error recomputed, then propagation from the two
+    /// already-visited neighbours (`n1`, `n2`, with the offsets `e1`, `e2` from them to q), then
+    /// random search. Returns the new match and the recomputed error of `cur` (∞ when `cur`
+    /// is not usable).
     #[allow(clippy::too_many_arguments)]
     fn improve(
         &self,
@@ -270,14 +269,14 @@ impl<'a> Ctx<'a> {
         e2: (f32, f32),
         rng: &mut Rng,
         stats: &mut Stats,
-        refreshed: &mut f32,
-    ) -> Match {
+    ) -> (Match, f32) {
         let win = self.window(q);
         let seg = self.wanted_segment(q);
         // The current match's error under this context (the target estimate and Ω change
         // between sweeps), from the window the search uses anyway.
         let mut best = Match { err: self.error_in(&win, &cur), ..cur };
-        *refreshed = best.err;
+        let refreshed = best.err;
+        stats.evaluations += refreshed.is_finite() as u64;
         for (n, e) in [(n1, e1), (n2, e2)] {
             let Some(n) = n else { continue };
             if !n.ok {
@@ -339,7 +338,7 @@ impl<'a> Ctx<'a> {
             let s_dir = src.dirs[idx as usize];
             self.try_valid(q, &win, &mut best, s_dir, i as usize, x as f32, y as f32, None, stats);
         }
-        best
+        (best, refreshed)
     }
 }
 
@@ -358,7 +357,6 @@ pub(crate) fn sweep(ctx: &Ctx, nnf: &mut Nnf, iter: usize) -> (Stats, f64) {
     let snapshot = nnf.data.clone();
     let forward = iter.is_multiple_of(2);
     let step: isize = if forward { 1 } else { -1 };
-    let active: Vec<bool> = ctx.tgt.info.iter().map(|i| i.flags & VALID != 0).collect();
     let stats: Vec<(Stats, f64, u64)> = nnf
         .data
         .par_chunks_mut(tile_rows(h) * w)
@@ -380,7 +378,7 @@ pub(crate) fn sweep(ctx: &Ctx, nnf: &mut Nnf, iter: usize) -> (Stats, f64) {
                 for c in 0..w {
                     let x = if forward { c } else { w - 1 - c };
                     let q = y * w + x;
-                    if !active[q] {
+                    if ctx.tgt.info[q].flags & VALID == 0 {
                         continue;
                     }
                     let (xi, yi) = (x as isize, y as isize);
@@ -390,9 +388,8 @@ pub(crate) fn sweep(ctx: &Ctx, nnf: &mut Nnf, iter: usize) -> (Stats, f64) {
                         Rng::keyed(&[ctx.keys[0], ctx.keys[1], ctx.keys[2], ctx.keys[3], iter as u64, q as u64]);
                     let cur = chunk[(y - y0) * w + x];
                     let e = step as f32;
-                    let mut refreshed = f32::INFINITY;
-                    let new = ctx.improve(q, cur, n1, (e, 0.0), n2, (0.0, e), &mut rng, &mut stats, &mut refreshed);
-                    if cur.ok && refreshed.is_finite() {
+                    let (new, refreshed) = ctx.improve(q, cur, n1, (e, 0.0), n2, (0.0, e), &mut rng, &mut stats);
+                    if refreshed.is_finite() {
                         energy += refreshed as f64;
                         scored += 1;
                     }
@@ -404,7 +401,5 @@ pub(crate) fn sweep(ctx: &Ctx, nnf: &mut Nnf, iter: usize) -> (Stats, f64) {
         .collect();
     let evaluations = stats.iter().map(|s| s.0.evaluations).sum::<u64>();
     let (energy, scored) = stats.iter().fold((0.0, 0), |(e, n), s| (e + s.1, n + s.2));
-    // The refresh is one full evaluation per pixel.
-    let active = active.iter().filter(|&&a| a).count() as u64;
-    (Stats { evaluations: evaluations + active }, if scored > 0 { energy / scored as f64 } else { 0.0 })
+    (Stats { evaluations }, if scored > 0 { energy / scored as f64 } else { 0.0 })
 }

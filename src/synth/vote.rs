@@ -60,37 +60,35 @@ unsafe fn vote_row_avx2(
 #[inline(always)]
 fn vote_row(src: &SourceLevel, nnf: &Nnf, taps: &[((isize, isize), f32)], y: usize, row: &mut [Rgb], cubic: bool) {
     let (w, h) = (nnf.w, nnf.h);
-    {
-        for (x, o) in row.iter_mut().enumerate() {
-            if !nnf.data[y * w + x].ok {
+    for (x, o) in row.iter_mut().enumerate() {
+        if !nnf.data[y * w + x].ok {
+            continue;
+        }
+        let mut acc = [0.0f32; 3];
+        let mut n = 0.0f32;
+        for &((a, b), wt) in taps {
+            // The neighbour centered at (x − a, y − b) covers this pixel at its offset (a, b).
+            let (nx, ny) = (x as isize - a, y as isize - b);
+            if nx < 0 || ny < 0 || nx >= w as isize || ny >= h as isize {
                 continue;
             }
-            let mut acc = [0.0f32; 3];
-            let mut n = 0.0f32;
-            for &((a, b), wt) in taps {
-                // The neighbour centered at (x − a, y − b) covers this pixel at its offset (a, b).
-                let (nx, ny) = (x as isize - a, y as isize - b);
-                if nx < 0 || ny < 0 || nx >= w as isize || ny >= h as isize {
-                    continue;
-                }
-                let m = &nnf.data[ny as usize * w + nx as usize];
-                if !m.ok {
-                    continue;
-                }
-                let (dx, dy) = m.rotate(a as f32, b as f32);
-                let c = if cubic {
-                    src.sample_rgb_cubic(m.i as usize, m.x + dx, m.y + dy)
-                } else {
-                    src.sample_rgb(m.i as usize, m.x + dx, m.y + dy)
-                };
-                acc[0] += wt * c[0];
-                acc[1] += wt * c[1];
-                acc[2] += wt * c[2];
-                n += wt;
+            let m = &nnf.data[ny as usize * w + nx as usize];
+            if !m.ok {
+                continue;
             }
-            if n > 0.0 {
-                *o = [acc[0] / n, acc[1] / n, acc[2] / n];
-            }
+            let (dx, dy) = m.rotate(a as f32, b as f32);
+            let c = if cubic {
+                src.sample_rgb_cubic(m.i as usize, m.x + dx, m.y + dy)
+            } else {
+                src.sample_rgb(m.i as usize, m.x + dx, m.y + dy)
+            };
+            acc[0] += wt * c[0];
+            acc[1] += wt * c[1];
+            acc[2] += wt * c[2];
+            n += wt;
+        }
+        if n > 0.0 {
+            *o = [acc[0] / n, acc[1] / n, acc[2] / n];
         }
     }
 }
