@@ -49,9 +49,10 @@ fn mark(src: &SourceLevel, nnf: &Nnf, tgt: &TargetLevel, marks: &mut [Vec<i32>])
 /// in every frame) into counts Ω* = the sum over frames i − r ..= i + r, handing each frame's
 /// counts to `out(i, counts)`, and clears the splats.
 fn box_sum(parts: &mut [Vec<&mut [i32]>], r: usize, mut out: impl FnMut(usize, &[i32])) {
-    let frames = parts.first().map_or(0, |p| p.len());
-    let len = parts.first().and_then(|p| p.first()).map_or(0, |f| f.len());
-    let (first, rest) = parts.split_first_mut().expect("at least one part");
+    // No parts: no frames to hand out.
+    let Some((first, rest)) = parts.split_first_mut() else { return };
+    let frames = first.len();
+    let len = first.first().map_or(0, |f| f.len());
     // Frame j's splats summed over the parts into the first part (the others cleared), and
     // added to the running sum.
     fn add(first: &mut [&mut [i32]], rest: &mut [Vec<&mut [i32]>], j: usize, run: &mut [i32]) {
@@ -92,13 +93,13 @@ fn columns<'a, T>(
     per: usize,
 ) -> Vec<Vec<Vec<&'a mut [T]>>> {
     let mut cols: Vec<Vec<Vec<&mut [T]>>> = (0..frame_len.div_ceil(per)).map(|_| Vec::new()).collect();
-    for array in arrays {
+    for (a, array) in arrays.into_iter().enumerate() {
         for col in cols.iter_mut() {
             col.push(Vec::new());
         }
         for frame in array.chunks_mut(frame_len) {
             for (c, piece) in frame.chunks_mut(per).enumerate() {
-                cols[c].last_mut().expect("pushed above").push(piece);
+                cols[c][a].push(piece);
             }
         }
     }
