@@ -442,7 +442,7 @@ pub(crate) fn at(i: usize, cx: f32, cy: f32, c: f32, s: f32) -> Center {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::guide::FrameGuides;
     use crate::img::Plane;

@@ -33,16 +33,20 @@ pub(crate) fn vote_with(src: &SourceLevel, nnf: &Nnf, fill: Rgb, sigma: f32, cub
         #[cfg(target_arch = "x86_64")]
         {
             if super::patch::has_avx2() {
-                // SAFETY: the CPU supports AVX2 (checked above); the body is the same safe code.
+                // SAFETY: the CPU supports AVX2 (checked above).
                 return unsafe { vote_row_avx2(src, nnf, &taps, y, row, cubic) };
             }
         }
-        vote_row(src, nnf, &taps, y, row, cubic)
+        if cubic {
+            vote_row(nnf, &taps, y, row, |i, x, y| src.sample_rgb_cubic(i, x, y))
+        } else {
+            vote_row(nnf, &taps, y, row, |i, x, y| src.sample_rgb(i, x, y))
+        }
     });
     out
 }
 
-/// [`vote_row`] compiled for AVX2 (the same operations, so the same results).
+/// [`vote_row`] compiled for AVX2, with the AVX2 samplers (the same results).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn vote_row_avx2(
@@ -53,12 +57,22 @@ unsafe fn vote_row_avx2(
     row: &mut [Rgb],
     cubic: bool,
 ) {
-    vote_row(src, nnf, taps, y, row, cubic)
+    if cubic {
+        vote_row(nnf, taps, y, row, |i, x, y| src.sample_rgb_cubic_avx2(i, x, y))
+    } else {
+        vote_row(nnf, taps, y, row, |i, x, y| src.sample_rgb_avx2(i, x, y))
+    }
 }
 
-/// Votes row `y` of the field into `row`.
+/// Votes row `y` of the field into `row`, sampling the source with `sample(i, x, y)`.
 #[inline(always)]
-fn vote_row(src: &SourceLevel, nnf: &Nnf, taps: &[((isize, isize), f32)], y: usize, row: &mut [Rgb], cubic: bool) {
+fn vote_row(
+    nnf: &Nnf,
+    taps: &[((isize, isize), f32)],
+    y: usize,
+    row: &mut [Rgb],
+    sample: impl Fn(usize, f32, f32) -> Rgb,
+) {
     let (w, h) = (nnf.w, nnf.h);
     for (x, o) in row.iter_mut().enumerate() {
         if !nnf.data[y * w + x].ok {
@@ -77,11 +91,7 @@ fn vote_row(src: &SourceLevel, nnf: &Nnf, taps: &[((isize, isize), f32)], y: usi
                 continue;
             }
             let (dx, dy) = m.rotate(a as f32, b as f32);
-            let c = if cubic {
-                src.sample_rgb_cubic(m.i as usize, m.x + dx, m.y + dy)
-            } else {
-                src.sample_rgb(m.i as usize, m.x + dx, m.y + dy)
-            };
+            let c = sample(m.i as usize, m.x + dx, m.y + dy);
             acc[0] += wt * c[0];
             acc[1] += wt * c[1];
             acc[2] += wt * c[2];
