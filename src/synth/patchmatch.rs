@@ -12,7 +12,7 @@ use super::nnf::{Match, Nnf, aligning_rotation};
 use super::params::{HALF, PATCH, Params};
 use super::patch::{Center, Query, Window, patch_error, patch_error_pair};
 use super::rng::Rng;
-use super::source::{Feat, SourceLevel, VALID, floor_i32};
+use super::source::{Feat, SourceLevel, VALID, bit_set, floor4_i32};
 use super::target::TargetLevel;
 use glam::Vec2;
 use rayon::prelude::*;
@@ -66,6 +66,24 @@ pub(crate) struct Ctx<'a> {
     pub params: &'a Params,
     /// Keys of the random streams (seed, frame, level, EM iteration).
     pub keys: [u64; 4],
+    /// The half-sizes (x, y, i) of the random-search windows, α^k·(w, h, l_S) for k = 0, 1,
+    /// … while the window is at least a pixel wide ([`search_radii`]), and how many there are.
+    pub radii: [(f32, f32, f32); MAX_RANDOM],
+    pub draws: usize,
+}
+
+/// The random-search windows of a level: α^k·(w, h, l_S) for k from 0 until both spatial
+/// half-sizes are below one pixel, at most [`MAX_RANDOM`]; and how many.
+pub(crate) fn search_radii(src: &SourceLevel, alpha: f32) -> ([(f32, f32, f32); MAX_RANDOM], usize) {
+    let mut radii = [(0.0, 0.0, 0.0); MAX_RANDOM];
+    let (mut sx, mut sy, mut si) = (src.w as f32, src.h as f32, src.frames as f32);
+    let mut n = 0;
+    while (sx >= 1.0 || sy >= 1.0) && n < MAX_RANDOM {
+        radii[n] = (sx, sy, si);
+        (sx, sy, si) = (sx * alpha, sy * alpha, si * alpha);
+        n += 1;
+    }
+    (radii, n)
 }
 
 /// Counts of patch-error evaluations, for profiling.
@@ -90,7 +108,8 @@ impl<'a> Ctx<'a> {
             Some((feat, w)) => (feat, w),
             None => (&src.feat[..], 0.0),
         };
-        Ctx { src, tgt, feat, w_om, w_col, params, keys }
+        let (radii, draws) = search_radii(src, params.alpha);
+        Ctx { src, tgt, feat, w_om, w_col, params, keys, radii, draws }
     }
 
     #[inline]
@@ -296,32 +315,31 @@ impl<'a> Ctx<'a> {
         let v0 = best;
         let src = self.src;
         let last = src.frames as i32 - 1;
-        let (mut sx, mut sy, mut si) = (src.w as f32, src.h as f32, src.frames as f32);
-        let alpha = self.params.alpha;
-        // (padded index, frame, x, y) of each valid candidate.
-        let mut cands = [(0u32, 0u16, 0u16, 0u16); MAX_RANDOM];
-        let mut n = 0usize;
-        let mut draws = 0;
-        // The last three accepted indices (small windows repeat candidates; an evaluation of the
-        // same one gains nothing).
-        let mut recent = [u32::MAX; 3];
-        // Branch-free: whether a draw is kept is data the CPU cannot predict, so every draw is
-        // written and only the kept ones advance `n`.
-        while (sx >= 1.0 || sy >= 1.0) && draws < MAX_RANDOM {
-            draws += 1;
+        let valid = src.valid_table(seg);
+        // (padded index, frame, x, y) of each draw, and whether it is a valid center.
+        let mut drawn = [(0u32, 0u16, 0u16, 0u16, false); MAX_RANDOM];
+        for (d, &(sx, sy, si)) in drawn.iter_mut().zip(&self.radii[..self.draws]) {
             let (ox, oy, oi) = (rng.range_f32(-sx, sx), rng.range_f32(-sy, sy), rng.range_f32(-si, si));
-            (sx, sy, si) = (sx * alpha, sy * alpha, si * alpha);
-            let x = floor_i32(v0.x + ox + 0.5);
-            let y = floor_i32(v0.y + oy + 0.5);
-            let i = floor_i32(v0.i as f32 + oi + 0.5).clamp(0, last);
+            let [x, y, i, _] = floor4_i32([v0.x + ox + 0.5, v0.y + oy + 0.5, v0.i as f32 + oi + 0.5, 0.0]);
+            let i = i.clamp(0, last);
             // Negative coordinates wrap to large unsigned ones.
             let inside = (x as u32) < src.w as u32 && (y as u32) < src.h as u32;
             let (x, y) = if inside { (x as usize, y as usize) } else { (0, 0) };
             let idx = src.index(i as usize, x, y);
             // Indices fit 32 bits and coordinates 16 (the exemplar's size limits).
-            let key = idx as u32;
-            let keep = inside & (key != recent[0]) & (key != recent[1]) & (key != recent[2]) & src.is_valid(seg, idx);
-            cands[n] = (key, i as u16, x as u16, y as u16);
+            *d = (idx as u32, i as u16, x as u16, y as u16, inside & bit_set(valid, idx));
+        }
+        // The valid ones, but for a repeat of one of the last three kept (small windows repeat
+        // candidates; an evaluation of the same one gains nothing). A separate pass, so that the
+        // validity look-ups above (at random places of the bit table) do not wait for each
+        // other through `recent`. Branch-free: whether a draw is kept is data the CPU cannot
+        // predict, so every draw is written and only the kept ones advance `n`.
+        let mut cands = [(0u32, 0u16, 0u16, 0u16); MAX_RANDOM];
+        let mut n = 0usize;
+        let mut recent = [u32::MAX; 3];
+        for &(key, i, x, y, valid) in &drawn[..self.draws] {
+            let keep = valid & (key != recent[0]) & (key != recent[1]) & (key != recent[2]);
+            cands[n] = (key, i, x, y);
             if keep {
                 recent = [key, recent[0], recent[1]];
             }

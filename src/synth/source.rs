@@ -88,6 +88,29 @@ pub(crate) fn floor_i32(v: f32) -> i32 {
     t - ((t as f32) > v) as i32
 }
 
+/// [`floor_i32`] of four values at once (four SSE2 instructions on x86_64, where a saturating
+/// `as i32` costs several per value). Values outside the i32 range give unspecified results
+/// (never undefined behaviour).
+#[inline(always)]
+pub(crate) fn floor4_i32(v: [f32; 4]) -> [i32; 4] {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::*;
+        // SAFETY: SSE2 is part of the x86_64 baseline; the loads and stores are of 4 values.
+        unsafe {
+            let x = _mm_loadu_ps(v.as_ptr());
+            let t = _mm_cvttps_epi32(x);
+            // −1 where truncation went up (negative non-integers).
+            let up = _mm_castps_si128(_mm_cmpgt_ps(_mm_cvtepi32_ps(t), x));
+            let mut out = [0i32; 4];
+            _mm_storeu_si128(out.as_mut_ptr() as *mut __m128i, _mm_add_epi32(t, up));
+            out
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    v.map(floor_i32)
+}
+
 /// Per-pixel data not needed in the patch error's inner loop.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct PixInfo {
@@ -159,6 +182,12 @@ pub(crate) fn dilate(mask: &Plane<bool>, r: usize) -> Plane<bool> {
     res
 }
 
+/// Whether bit `idx` of the bit set `bits` is set.
+#[inline(always)]
+pub(crate) fn bit_set(bits: &[u64], idx: usize) -> bool {
+    bits[idx / 64] >> (idx % 64) & 1 != 0
+}
+
 /// One pyramid level of the exemplar.
 pub(crate) struct SourceLevel {
     /// Frame width and height at this level (unpadded).
@@ -179,10 +208,11 @@ pub(crate) struct SourceLevel {
     pub dirs: Vec<Vec2>,
     /// Valid centers per segment (0 = border, 1 = interior), as padded indices.
     pub valid: [Vec<u32>; 2],
-    /// The same as bit sets over padded indices (bit `idx % 64` of word `idx / 64`): 1 bit a
-    /// voxel, so the search rejects a candidate outside the mask or in the wrong segment from
-    /// a table that stays in cache, without reading the exemplar at a random place.
-    pub valid_bits: [Vec<u64>; 2],
+    /// The same as bit sets over padded indices (bit `idx % 64` of word `idx / 64`), and a
+    /// third of the two segments together: 1 bit a voxel, so the search rejects a candidate
+    /// outside the mask or in the wrong segment from a table that stays in cache, without
+    /// reading the exemplar at a random place.
+    pub valid_bits: [Vec<u64>; 3],
     /// |S_seg|: mask pixels per segment over all frames (for ω*).
     pub seg_count: [usize; 2],
     /// Lane weights in quantization units ([`Quant::weights`]).
@@ -207,11 +237,14 @@ impl SourceLevel {
     /// Whether padded index `idx` is a valid center of segment `seg` (of either when `None`).
     #[inline]
     pub fn is_valid(&self, seg: Option<usize>, idx: usize) -> bool {
-        let bit = |s: usize| self.valid_bits[s][idx / 64] >> (idx % 64) & 1 != 0;
-        match seg {
-            Some(s) => bit(s),
-            None => bit(0) || bit(1),
-        }
+        bit_set(self.valid_table(seg), idx)
+    }
+
+    /// The bit set of valid centers of segment `seg` (of either when `None`), for
+    /// [`bit_set`].
+    #[inline]
+    pub fn valid_table(&self, seg: Option<usize>) -> &[u64] {
+        &self.valid_bits[seg.unwrap_or(2).min(2)]
     }
 
     /// Padded index of the pixel nearest to (x, y) in frame i, when inside the frame.
@@ -514,13 +547,15 @@ fn build_level(rgb: &[Plane<Rgb>], guides: &[FrameGuides], qn: &Quant, lane_w: [
         }
     }
     let dirs = info.iter().map(|p| p.dir).collect();
-    let valid_bits = valid.each_ref().map(|list| {
+    let lists = [&valid[0][..], &valid[1][..], &[]];
+    let mut valid_bits = lists.map(|list| {
         let mut bits = vec![0u64; feat.len().div_ceil(64)];
         for &idx in list {
             bits[idx as usize / 64] |= 1 << (idx % 64);
         }
         bits
     });
+    valid_bits[2] = valid_bits[0].iter().zip(&valid_bits[1]).map(|(a, b)| a | b).collect();
     SourceLevel { w, h, frames, stride, frame_len, feat, info, dirs, valid, valid_bits, seg_count, lane_w }
 }
 
@@ -539,8 +574,9 @@ mod tests {
 
     #[test]
     fn floor_without_libm() {
-        for v in [-2.5f32, -1.0, -0.2, 0.0, 0.7, 3.0] {
+        for v in [-2.5f32, -1.0, -0.2, 0.0, -0.0, 0.7, 3.0, 1e6 + 0.5, -7e5 - 0.25] {
             assert_eq!(floor_i32(v), v.floor() as i32);
+            assert_eq!(floor4_i32([v, -v, v + 0.5, v - 0.5]), [v, -v, v + 0.5, v - 0.5].map(|x| x.floor() as i32));
         }
     }
 
