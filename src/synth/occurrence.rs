@@ -10,39 +10,66 @@
 //! the exemplar's pixels adds the parts, runs the sum along time, writes the penalty and clears
 //! the arrays for the next update.
 
-use super::nnf::{Nnf, offsets};
+use super::nnf::Nnf;
 use super::params::PATCH;
-use super::source::{FLAG_LANE, Feat, IN_MASK, INTERIOR, OMEGA_LANE, PAD, SourceLevel, floor_i32};
+use super::patch::{Center, OFFS, tap_offsets};
+use super::source::{FLAG_LANE, Feat, IN_MASK, INTERIOR, OMEGA_LANE, SourceLevel};
 use super::target::TargetLevel;
 use rayon::prelude::*;
 
 /// Adds the rotated n × n window of every matched in-mask pixel of `nnf`, in its own frame,
-/// into `marks` (one zeroed array of the level's padded size per part of the target).
+/// into `marks` (one zeroed array of the level's padded size per part of the target). The
+/// voxels of a window are the pixels the patch error reads for it ([`tap_offsets`]).
 fn mark(src: &SourceLevel, nnf: &Nnf, tgt: &TargetLevel, marks: &mut [Vec<i32>]) {
-    let rows = (src.frame_len / src.stride) as i32;
     let per = tgt.active.len().div_ceil(marks.len()).max(1);
     marks.par_iter_mut().zip(tgt.active.par_chunks(per)).for_each(|(hits, chunk)| {
-        for &q in chunk {
-            let q = q as usize;
-            if tgt.info[q].flags & IN_MASK == 0 {
-                continue;
-            }
-            let m = &nnf.data[q];
-            if !m.ok {
-                continue;
-            }
-            let frame = &mut hits[m.i as usize * src.frame_len..(m.i as usize + 1) * src.frame_len];
-            for (a, b) in offsets() {
-                let (dx, dy) = m.rotate(a as f32, b as f32);
-                let px = floor_i32(m.x + dx + PAD as f32 + 0.5);
-                let py = floor_i32(m.y + dy + PAD as f32 + 0.5);
-                if px < 0 || py < 0 || px >= src.stride as i32 || py >= rows {
-                    continue;
-                }
-                frame[py as usize * src.stride + px as usize] += 1;
+        #[cfg(target_arch = "x86_64")]
+        {
+            if super::patch::has_avx2() {
+                // SAFETY: the CPU supports AVX2 (checked above).
+                return unsafe { mark_part_avx2(src, nnf, tgt, chunk, hits) };
             }
         }
+        mark_part(src, nnf, tgt, chunk, hits, tap_offsets)
     });
+}
+
+/// [`mark_part`] compiled for AVX2, with the AVX2 tap offsets (the same values).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn mark_part_avx2(src: &SourceLevel, nnf: &Nnf, tgt: &TargetLevel, chunk: &[u32], hits: &mut [i32]) {
+    mark_part(src, nnf, tgt, chunk, hits, |stride, at| super::patch::tap_offsets_avx2(stride, at))
+}
+
+/// The windows of the target pixels `chunk` added into `hits`.
+#[inline(always)]
+fn mark_part(
+    src: &SourceLevel,
+    nnf: &Nnf,
+    tgt: &TargetLevel,
+    chunk: &[u32],
+    hits: &mut [i32],
+    offsets: impl Fn(usize, Center) -> [i32; OFFS],
+) {
+    for &q in chunk {
+        let q = q as usize;
+        if tgt.info[q].flags & IN_MASK == 0 {
+            continue;
+        }
+        let m = &nnf.data[q];
+        if !m.ok {
+            continue;
+        }
+        let frame = &mut hits[m.i as usize * src.frame_len..(m.i as usize + 1) * src.frame_len];
+        let offs = offsets(src.stride, Center { i: m.i as usize, cx: m.x, cy: m.y, c: m.c, s: m.s });
+        for &o in &offs[..PATCH * PATCH] {
+            // Matches have valid centers, so every tap is inside the padded frame; one that
+            // were not would be skipped (a negative offset wraps to a large index).
+            if let Some(h) = frame.get_mut(o as usize) {
+                *h += 1;
+            }
+        }
+    }
 }
 
 /// Turns the splats of one column of pixels (`parts[p][i]`: part p, frame i, the same pixels
@@ -211,9 +238,10 @@ impl Occurrence {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synth::nnf::Match;
+    use crate::synth::nnf::{Match, offsets};
     use crate::synth::params::Params;
     use crate::synth::rng::Rng;
+    use crate::synth::source::PAD;
     use crate::synth::source::{MARGIN, SourcePyramid};
     use crate::synth::tests::{disc_exemplar, disc_guides};
 
@@ -238,7 +266,8 @@ mod tests {
         nnf
     }
 
-    /// Ω* counted the obvious way: every tap of every box, frame by frame.
+    /// Ω* counted the obvious way: every tap of every box, frame by frame, each tap at the
+    /// pixel nearest to its rotated position (as the patch error reads it).
     fn brute_counts(src: &SourceLevel, nnf: &Nnf, tgt: &TargetLevel, r: usize) -> Vec<i32> {
         let mut out = vec![0; src.feat.len()];
         for &q in &tgt.active {
@@ -248,8 +277,8 @@ mod tests {
             }
             for (a, b) in offsets() {
                 let (dx, dy) = m.rotate(a as f32, b as f32);
-                let px = (m.x + dx + PAD as f32 + 0.5).floor() as usize;
-                let py = (m.y + dy + PAD as f32 + 0.5).floor() as usize;
+                let px = (m.x + PAD as f32 + dx + 0.5).floor() as usize;
+                let py = (m.y + PAD as f32 + dy + 0.5).floor() as usize;
                 let (lo, hi) = ((m.i as usize).saturating_sub(r), (m.i as usize + r).min(src.frames - 1));
                 for i in lo..=hi {
                     out[i * src.frame_len + py * src.stride + px] += 1;

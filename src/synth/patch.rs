@@ -222,27 +222,13 @@ pub(crate) fn has_avx2() -> bool {
     }
 }
 
-/// Padded source index of the tap nearest to (sx, sy) (padded coordinates) in the frame
-/// starting at `fbase`.
-///
-/// # Safety
-/// `sx` and `sy` are finite, ≥ 0 and inside the padded frame (the validity rule).
-#[inline(always)]
-unsafe fn tap_index(fbase: usize, stride: i32, sx: f32, sy: f32) -> usize {
-    // Truncation is floor since padded coordinates are positive, so no saturating conversion
-    // is needed; 32-bit products (a padded frame is far below 2³¹ pixels).
-    // SAFETY: the caller's contract.
-    let (x0, y0) = unsafe { ((sx + 0.5).to_int_unchecked::<i32>(), (sy + 0.5).to_int_unchecked::<i32>()) };
-    fbase + (y0 * stride + x0) as usize
-}
-
 /// Tap offsets (a − r, b − r) of the n × n window in row-major order, padded with zeros to a
 /// multiple of 8 for the AVX2 index computation.
-const OFFS: usize = (PATCH * PATCH).div_ceil(8) * 8;
-const TAP_A: [f32; OFFS] = tap_offsets(true);
-const TAP_B: [f32; OFFS] = tap_offsets(false);
+pub(crate) const OFFS: usize = (PATCH * PATCH).div_ceil(8) * 8;
+const TAP_A: [f32; OFFS] = window_offsets(true);
+const TAP_B: [f32; OFFS] = window_offsets(false);
 
-const fn tap_offsets(column: bool) -> [f32; OFFS] {
+const fn window_offsets(column: bool) -> [f32; OFFS] {
     let mut out = [0.0f32; OFFS];
     let mut k = 0;
     while k < PATCH * PATCH {
@@ -261,6 +247,52 @@ fn tree_sum(a: &[f32; LANES]) -> f32 {
     (s[0] + s[2]) + (s[1] + s[3])
 }
 
+/// The offsets from frame i's first padded pixel of the n² taps of the rotated window around
+/// `at` (row-major; zeros after the n²-th): the pixel nearest to `(cx, cy) + M·(a − r, b − r)`
+/// in padded coordinates, `⌊x + ½⌋` by truncation (padded coordinates are positive). Same
+/// contract as [`patch_error`] (a valid center).
+#[inline(always)]
+pub(crate) fn tap_offsets(stride: usize, at: Center) -> [i32; OFFS] {
+    let Center { cx, cy, c, s, .. } = at;
+    let (px, py) = (cx + PAD as f32, cy + PAD as f32);
+    let mut offs = [0i32; OFFS];
+    for (k, o) in offs.iter_mut().enumerate().take(PATCH * PATCH) {
+        let (af, bf) = (TAP_A[k], TAP_B[k]);
+        let sx = px + (c * af - s * bf);
+        let sy = py + (s * af + c * bf);
+        *o = (sy + 0.5) as i32 * stride as i32 + (sx + 0.5) as i32;
+    }
+    offs
+}
+
+/// [`tap_offsets`] 8 at a time (the same operations in the same order).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(crate) fn tap_offsets_avx2(stride: usize, at: Center) -> [i32; OFFS] {
+    use std::arch::x86_64::*;
+    let Center { cx, cy, c, s, .. } = at;
+    let (px, py) = (cx + PAD as f32, cy + PAD as f32);
+    let mut offs = [0i32; OFFS];
+    let (cv, sv) = (_mm256_set1_ps(c), _mm256_set1_ps(s));
+    let (pxv, pyv, half) = (_mm256_set1_ps(px), _mm256_set1_ps(py), _mm256_set1_ps(0.5));
+    let stride_v = _mm256_set1_epi32(stride as i32);
+    for v in 0..OFFS / 8 {
+        // SAFETY: TAP_A, TAP_B and `offs` hold OFFS values.
+        let (af, bf) = unsafe { (_mm256_loadu_ps(TAP_A[v * 8..].as_ptr()), _mm256_loadu_ps(TAP_B[v * 8..].as_ptr())) };
+        let sx = _mm256_add_ps(pxv, _mm256_sub_ps(_mm256_mul_ps(cv, af), _mm256_mul_ps(sv, bf)));
+        let sy = _mm256_add_ps(pyv, _mm256_add_ps(_mm256_mul_ps(sv, af), _mm256_mul_ps(cv, bf)));
+        let ix = _mm256_cvttps_epi32(_mm256_add_ps(sx, half));
+        let iy = _mm256_cvttps_epi32(_mm256_add_ps(sy, half));
+        let o = _mm256_add_epi32(_mm256_mullo_epi32(iy, stride_v), ix);
+        // SAFETY: as above.
+        unsafe { _mm256_storeu_si256(offs[v * 8..].as_mut_ptr() as *mut __m256i, o) };
+    }
+    // The padding lanes (offset 0 from TAP_A = TAP_B = 0) are not taps.
+    offs[PATCH * PATCH..].fill(0);
+    offs
+}
+
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn kernel_avx2<const PAIR: bool>(
@@ -271,15 +303,12 @@ unsafe fn kernel_avx2<const PAIR: bool>(
     at: Center,
     best: f32,
 ) -> (f32, f32) {
-    let Center { i, cx, cy, c, s } = at;
     use std::arch::x86_64::*;
     let fp = feat.as_ptr();
-    let stride = src.stride as i32;
-    let fbase = i * src.frame_len;
+    let fbase = at.i * src.frame_len;
     let (ta, tb) = (taps[0].as_ptr() as *const f32, taps[1].as_ptr() as *const f32);
     // SAFETY: `w` holds 8 floats.
     let w = unsafe { _mm256_loadu_ps(win.w.as_ptr()) };
-    let (px, py) = (cx + PAD as f32, cy + PAD as f32);
     // Two accumulators per error (even and odd columns) halve the chain of dependent additions.
     let mut acc = [_mm256_setzero_ps(); 4];
     // The tree order of `tree_sum`.
@@ -292,27 +321,7 @@ unsafe fn kernel_avx2<const PAIR: bool>(
         let a = hsum(_mm256_add_ps(acc[0], acc[1]));
         (a, if PAIR { hsum(_mm256_add_ps(acc[2], acc[3])) } else { a })
     };
-    // The 25 tap indices, 8 at a time: position M·(a, b) around the center in padded
-    // coordinates, `px + (c·a − s·b)` and `py + (s·a + c·b)`, rounded to the nearest pixel as
-    // `tap_index` does (the same operations in the same order).
-    let mut offs = [0i32; OFFS];
-    {
-        let (cv, sv) = (_mm256_set1_ps(c), _mm256_set1_ps(s));
-        let (pxv, pyv, half) = (_mm256_set1_ps(px), _mm256_set1_ps(py), _mm256_set1_ps(0.5));
-        let stride_v = _mm256_set1_epi32(stride);
-        for v in 0..OFFS / 8 {
-            // SAFETY: TAP_A, TAP_B and `offs` hold OFFS values.
-            let (af, bf) =
-                unsafe { (_mm256_loadu_ps(TAP_A[v * 8..].as_ptr()), _mm256_loadu_ps(TAP_B[v * 8..].as_ptr())) };
-            let sx = _mm256_add_ps(pxv, _mm256_sub_ps(_mm256_mul_ps(cv, af), _mm256_mul_ps(sv, bf)));
-            let sy = _mm256_add_ps(pyv, _mm256_add_ps(_mm256_mul_ps(sv, af), _mm256_mul_ps(cv, bf)));
-            let ix = _mm256_cvttps_epi32(_mm256_add_ps(sx, half));
-            let iy = _mm256_cvttps_epi32(_mm256_add_ps(sy, half));
-            let o = _mm256_add_epi32(_mm256_mullo_epi32(iy, stride_v), ix);
-            // SAFETY: as above.
-            unsafe { _mm256_storeu_si256(offs[v * 8..].as_mut_ptr() as *mut __m256i, o) };
-        }
-    }
+    let offs = tap_offsets_avx2(src.stride, at);
     for b in 0..PATCH {
         for a in 0..PATCH {
             // SAFETY (all unchecked accesses below): the padded coordinates are positive and
@@ -346,12 +355,9 @@ fn kernel_generic<const PAIR: bool>(
     at: Center,
     best: f32,
 ) -> (f32, f32) {
-    let Center { i, cx, cy, c, s } = at;
-    let stride = src.stride as i32;
-    let fbase = i * src.frame_len;
+    let fbase = at.i * src.frame_len;
+    let offs = tap_offsets(src.stride, at);
     let w = &win.w;
-    let r = HALF as f32;
-    let (px, py) = (cx + PAD as f32, cy + PAD as f32);
     let mut acc = [[0.0f32; LANES]; 4];
     let sum = |p: &[f32; LANES], q: &[f32; LANES]| tree_sum(&std::array::from_fn(|k| p[k] + q[k])) + win.base;
     let totals = |acc: &[[f32; LANES]; 4]| {
@@ -359,14 +365,9 @@ fn kernel_generic<const PAIR: bool>(
         (a, if PAIR { sum(&acc[2], &acc[3]) } else { a })
     };
     for b in 0..PATCH {
-        let bf = b as f32 - r;
         for a in 0..PATCH {
-            let af = a as f32 - r;
-            let sx = px + (c * af - s * bf);
-            let sy = py + (s * af + c * bf);
-            // SAFETY: sx, sy are finite and within the padded frame (validity rule).
-            let idx = unsafe { tap_index(fbase, stride, sx, sy) };
-            debug_assert!(idx < feat.len() && sx >= 0.0 && sy >= 0.0);
+            let idx = fbase + offs[b * PATCH + a] as usize;
+            debug_assert!(idx < feat.len());
             // SAFETY: idx lies in frame i's padded block (validity rule above).
             let v = unsafe { feat.get_unchecked(idx) }.map(f32::from);
             let k = b * PATCH + a;
