@@ -43,7 +43,10 @@ impl Quant {
     /// `v` of lane `k` quantized.
     #[inline]
     pub fn quantize(&self, k: usize, v: f32) -> u8 {
-        self.units(k, v).round().clamp(0.0, 255.0) as u8
+        // Rounding half away from zero, as `round()`, without its libm call: `c − ⌊c⌋` is exact.
+        let c = self.units(k, v).clamp(0.0, 255.0);
+        let t = c as u8;
+        t + (c - t as f32 >= 0.5) as u8
     }
 
     /// Per-lane weights of squared differences in quantization units:
@@ -615,6 +618,25 @@ mod tests {
             }
         }
         assert!(between > 10_000, "sub-pixel positions interpolate ({between})");
+    }
+
+    #[test]
+    fn quantize_rounds_as_round_does() {
+        // Lane 6 has scale 1 and offset 0: the value is its own unit.
+        let q = Quant::new(7.0);
+        let mut v = -3.0f32;
+        while v < 260.0 {
+            for x in [v, v + 0.5, v.next_up(), (v + 0.5).next_down(), (v + 0.5).next_up()] {
+                assert_eq!(q.quantize(6, x), x.round().clamp(0.0, 255.0) as u8, "{x}");
+            }
+            v += 0.25;
+        }
+        assert_eq!(q.quantize(6, 0.5f32.next_down()), 0);
+        assert_eq!(q.quantize(6, f32::NAN), 0);
+        assert_eq!(q.quantize(6, f32::INFINITY), 255);
+        for x in [0.3f32, 0.77, 0.5] {
+            assert_eq!(q.quantize(0, x), q.units(0, x).round() as u8);
+        }
     }
 
     #[test]
