@@ -539,6 +539,32 @@ pub(crate) mod tests {
         assert!(checked > 200);
     }
 
+    /// The tap pixels are the nearest to the rotated offsets, and the AVX2 computation gives
+    /// the same offsets.
+    #[test]
+    fn tap_offsets_are_the_nearest_pixels() {
+        let stride = 57;
+        let mut rng = Rng::keyed(&[21]);
+        for _ in 0..5000 {
+            let th = rng.range_f32(-3.2, 3.2);
+            let c =
+                Center { i: 0, cx: rng.range_f32(3.0, 40.0), cy: rng.range_f32(3.0, 40.0), c: th.cos(), s: th.sin() };
+            let offs = tap_offsets(stride, c);
+            for (k, (a, b)) in crate::synth::nnf::offsets().enumerate() {
+                let (a, b) = (a as f32, b as f32);
+                let x = (c.cx + PAD as f32 + (c.c * a - c.s * b) + 0.5).floor() as i32;
+                let y = (c.cy + PAD as f32 + (c.s * a + c.c * b) + 0.5).floor() as i32;
+                assert_eq!(offs[k], y * stride as i32 + x, "tap {k} of {c:?}");
+            }
+            assert!(offs[PATCH * PATCH..].iter().all(|&o| o == 0));
+            #[cfg(target_arch = "x86_64")]
+            if has_avx2() {
+                // SAFETY: the CPU supports AVX2.
+                assert_eq!(unsafe { tap_offsets_avx2(stride, c) }, offs);
+            }
+        }
+    }
+
     #[test]
     fn identity_match_has_zero_error() {
         let params = Params::builder().build().unwrap();
