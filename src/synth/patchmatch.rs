@@ -5,8 +5,8 @@
 //! Parallel as in thesis §4.4.2, made deterministic: the field is cut into fixed bands of
 //! [`tile_rows`] rows (a function of the field's height only) processed in parallel; inside a
 //! band propagation uses the values updated in this sweep, across band borders it reads the
-//! values from before the sweep (propagation across tiles is delayed one iteration). Random numbers are keyed per pixel and sweep, so the
-//! result does not depend on the thread count.
+//! values from before the sweep (propagation across tiles is delayed one iteration). Random
+//! numbers are keyed per pixel and sweep, so the result does not depend on the thread count.
 
 use super::nnf::{Match, Nnf, aligning_rotation};
 use super::params::{HALF, PATCH, Params};
@@ -372,17 +372,18 @@ const AHEAD: usize = 2;
 /// recomputed errors over the pixels with a usable match.
 pub(crate) fn sweep(ctx: &Ctx, nnf: &mut Nnf, iter: usize) -> (Stats, f64) {
     let (w, h) = (nnf.w, nnf.h);
+    let rows_per_band = tile_rows(h);
     let snapshot = nnf.data.clone();
     let forward = iter.is_multiple_of(2);
     let step: isize = if forward { 1 } else { -1 };
     let stats: Vec<(Stats, f64, u64)> = nnf
         .data
-        .par_chunks_mut(tile_rows(h) * w)
+        .par_chunks_mut(rows_per_band * w)
         .enumerate()
         .map(|(tile, chunk)| {
             let mut stats = Stats::default();
             let (mut energy, mut scored) = (0.0f64, 0u64);
-            let y0 = tile * tile_rows(h);
+            let y0 = tile * rows_per_band;
             let rows = chunk.len() / w;
             let get = |chunk: &[Match], x: isize, y: isize| -> Option<Match> {
                 if x < 0 || y < 0 || x >= w as isize || y >= h as isize {
