@@ -26,6 +26,15 @@ enum Command {
     /// Stylize an animation: every layer painted with an exemplar, recolored, composited,
     /// written as PNG frames (and a GIF).
     Render(Box<cli::render::Args>),
+    /// Print a batch render as a graph of jobs (JSON) for a job scheduler: one render-layer
+    /// job per stylized layer of each input, one composite job per input.
+    Plan(Box<cli::plan::Args>),
+    /// Paint one layer of one input into OUT_DIR/layers/NN_name/ (a job of a plan; continues
+    /// from its checkpoint when run again).
+    RenderLayer(Box<cli::jobs::LayerArgs>),
+    /// Recolor and composite an input's painted layers into frames and a GIF (a job of a
+    /// plan, after its render-layer jobs).
+    Composite(Box<cli::jobs::CompositeArgs>),
     /// Measure the engine's speed on a paper-like workload (the `horse` of Table 2).
     Bench(cli::bench::Args),
     /// Run the synthesis engine on a plain mask sequence (output in the exemplar's colors).
@@ -41,9 +50,13 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     cli::init_logging(cli.quiet, cli.verbose);
     let ctx = cli::Ctx { quiet: cli.quiet, verbose: cli.verbose };
+    cli::exit_with_parent();
     let result = match cli.command {
         Command::Inspect(args) => cli::inspect::run(args, &ctx),
         Command::Render(args) => cli::render::run(*args, &ctx),
+        Command::Plan(args) => cli::plan::run(*args, &ctx),
+        Command::RenderLayer(args) => cli::jobs::run_layer(*args, &ctx),
+        Command::Composite(args) => cli::jobs::run_composite(*args, &ctx),
         Command::Bench(args) => cli::bench::run(args, &ctx),
         Command::Synth(args) => cli::synth::run(args, &ctx),
         Command::Eval(args) => cli::eval::run(args, &ctx),

@@ -17,13 +17,26 @@
 //!
 //! An interrupted render keeps, after every completed frame, the state each layer's
 //! synthesizer carries to the next frame in `OUT_DIR/.fluidymation/`; [`RenderOptions::resume`]
-//! continues from there and gives the same frames as an uninterrupted run.
+//! continues from there and gives the same frames as an uninterrupted run. After a complete
+//! render only `progress.toml` stays there, so that resuming it (in a batch, say) knows it is
+//! done.
+//!
+//! # Batches and plans
+//!
+//! [`render_batch`] renders many files, several at once, sharing the prepared exemplars; a
+//! file that fails does not stop the others. The same render can also be cut into
+//! independent jobs — one per stylized layer ([`render_layer`]: the layer's frames painted
+//! in the exemplar's colors, with its own checkpoints) and one per file ([`composite`]:
+//! recoloring and compositing the painted layers into frames and a GIF) — which a job
+//! scheduler can run on many machines. All three give the same bytes: the painted layer
+//! passes through the same 16-bit quantization ([`paint`]) whether it stays in memory or is
+//! written to disk in between.
 
 use crate::anim::{Animation, RegionFrame};
 use crate::composite::{self, Background, LayerFrame, Pigment, Recolor, StrokeMode, StylizedLayer};
 use crate::error::{Error, Result};
 use crate::eval;
-use crate::exemplar::{self, Exemplar, SearchPath};
+use crate::exemplar::{self, Exemplar};
 use crate::guide::GuideStream;
 use crate::img::{self, Plane, Rgba};
 use crate::output::{self, GifOptions, GifWriter};
@@ -34,6 +47,13 @@ use std::collections::BTreeMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+mod batch;
+mod jobs;
+pub mod paint;
+
+pub use batch::{StyleCache, render_batch};
+pub use jobs::{LAYER_MANIFEST, LayerCost, LayerJobSummary, composite, layer_costs, render_layer};
 
 /// The style name that leaves a layer flat.
 pub const NO_STYLE: &str = "none";
@@ -210,7 +230,12 @@ fn style_params(base: &Params, ex: &Exemplar, scale: f32) -> Result<Params> {
 
 /// Renders `anim` as `opts` says; see the [module documentation](self).
 pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -> Result<RenderSummary> {
-    let start = Instant::now();
+    render_with(anim, opts, &StyleCache::new(), progress)
+}
+
+/// The frame range of `opts` inside the animation; an error when it is empty or the
+/// animation has nothing to stylize.
+fn frame_range(anim: &Animation, opts: &RenderOptions) -> Result<Range<usize>> {
     if anim.regions.is_empty() {
         return Err(Error::Empty {
             path: anim.path.clone(),
@@ -225,27 +250,53 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
             format!("a range inside 1..{} (1-based, inclusive)", anim.frames),
         ));
     }
-    let (w, h) = (anim.width as usize, anim.height as usize);
-    let background = match &opts.background {
-        None => Background::from_animation(anim.background.as_ref()),
-        Some(spec) => Background::parse(spec, w, h)?,
-    };
-    let styles_of = resolve_styles(anim, opts)?;
+    Ok(range)
+}
 
-    // Exemplars, each prepared once (guides and pyramid shared by its layers).
-    let search = SearchPath::standard(&opts.exemplar_dirs);
-    let mut names: Vec<String> = styles_of.iter().flatten().cloned().collect();
+fn background(anim: &Animation, opts: &RenderOptions) -> Result<Background> {
+    match &opts.background {
+        None => Ok(Background::from_animation(anim.background.as_ref())),
+        Some(spec) => Background::parse(spec, anim.width as usize, anim.height as usize),
+    }
+}
+
+/// The styles of one file's regions, resolved and prepared.
+struct Prepared {
+    /// Per region, the style's name (`None`: left flat).
+    styles_of: Vec<Option<String>>,
+    /// Per region, its entry in `styles` (`None`: flat, or not prepared).
+    region_style: Vec<Option<usize>>,
+    styles: Vec<Style>,
+}
+
+/// Resolves the style of every region and prepares the exemplars of the stylized ones (only
+/// of region `only` when given): each exemplar is loaded once, parameters are fitted to thin
+/// layers, and layers with the same exemplar and parameters share one prepared source.
+fn prepare(
+    anim: &Animation,
+    opts: &RenderOptions,
+    range: &Range<usize>,
+    only: Option<usize>,
+    cache: &StyleCache,
+) -> Result<Prepared> {
+    let styles_of = resolve_styles(anim, opts)?;
+    let wanted = |region: usize| only.is_none_or(|o| o == region);
+    let mut names: Vec<String> =
+        styles_of.iter().enumerate().filter(|(r, _)| wanted(*r)).filter_map(|(_, s)| s.clone()).collect();
     names.sort();
     names.dedup();
-    let exemplars: Vec<Exemplar> = names.iter().map(|n| exemplar::find(n, &search)).collect::<Result<_>>()?;
+    let exemplars: Vec<Exemplar> =
+        names.iter().map(|n| cache.exemplar(n, &opts.exemplar_dirs)).collect::<Result<_>>()?;
     let base: Vec<Params> =
         exemplars.iter().map(|ex| style_params(&opts.params, ex, opts.scale)).collect::<Result<_>>()?;
     // Per layer: its exemplar and the parameters fitted to its thickness (thin layers get a
-    // smaller blur σ and border width b, see `Params::fit_to_thickness`); layers with the same
-    // exemplar and parameters share one prepared source.
+    // smaller blur σ and border width b, see `Params::fit_to_thickness`).
     let fitted: Vec<Option<(usize, Params)>> = (0..anim.regions.len())
         .into_par_iter()
         .map(|region| -> Result<Option<(usize, Params)>> {
+            if !wanted(region) {
+                return Ok(None);
+            }
             let Some(e) = styles_of[region].as_ref().and_then(|n| names.iter().position(|m| m == n)) else {
                 return Ok(None);
             };
@@ -277,11 +328,135 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
         .into_iter()
         .map(|(e, params)| {
             let ex = exemplars[e].clone();
-            let source = Source::prepare(&ex, &params)?;
+            let source = cache.source(&names[e], &ex, &params, &opts.exemplar_dirs)?;
             let pigment = Pigment::from_exemplar(&ex);
             Ok(Style { name: names[e].clone(), exemplar: ex, source, pigment, params })
         })
         .collect::<Result<_>>()?;
+    Ok(Prepared { styles_of, region_style, styles })
+}
+
+/// Recolors one painted frame of a region ([`paint::Paint`], the engine's output after the
+/// 16-bit quantization every path shares) against its flat rendering.
+fn recolor_paint(
+    paint: &paint::Paint,
+    rf: &RegionFrame,
+    pigment: &Pigment,
+    opts: &RenderOptions,
+) -> Result<StylizedLayer> {
+    let (rgb, mask) = paint.rgb_mask();
+    composite::recolor_with(&rgb, &mask, &target_fill(rf, opts.strokes), pigment, opts.recolor)
+}
+
+/// Composites one frame from its regions (top-most first: a recolored layer or `None` for a
+/// flat one, with the region's flat rendering) and writes it, and with
+/// [`RenderOptions::keep_layers`] every layer alone into `layer_dirs`.
+fn write_composite(
+    anim: &Animation,
+    opts: &RenderOptions,
+    background: &Background,
+    frame: usize,
+    results: &[(Option<StylizedLayer>, RegionFrame)],
+    layer_dirs: &[PathBuf],
+) -> Result<()> {
+    // Bottom to top: regions are listed top-most first.
+    let frames: Vec<LayerFrame> = results
+        .iter()
+        .rev()
+        .map(|(st, rf)| match st {
+            Some(l) => LayerFrame::stylized(l, rf.strokes.as_ref()),
+            None => LayerFrame::flat(&rf.fill, rf.strokes.as_ref()),
+        })
+        .collect();
+    let image = composite::composite(anim.width as usize, anim.height as usize, background, &frames, opts.strokes)?;
+    if opts.keep_layers {
+        for ((st, rf), dir) in results.iter().zip(layer_dirs) {
+            let layer = match st {
+                Some(l) => l.to_rgba(),
+                None => rf.fill.clone(),
+            };
+            output::write_frame(dir, frame, anim.frames, &layer)?;
+        }
+    }
+    output::write_frame(&opts.out_dir, frame, anim.frames, &image)?;
+    Ok(())
+}
+
+/// Checks where the frames, the layers and the GIF go, creates the folders and removes the
+/// temporary files of a run that was killed while writing.
+fn prepare_outputs(anim: &Animation, opts: &RenderOptions) -> Result<Vec<PathBuf>> {
+    if let Some(gif) = &opts.gif {
+        if gif.is_dir() {
+            return Err(Error::io(
+                gif,
+                std::io::Error::new(std::io::ErrorKind::IsADirectory, "is a directory; --gif needs a file name"),
+            ));
+        }
+        if let Some(dir) = gif.parent().filter(|d| !d.as_os_str().is_empty()) {
+            output::prepare_dir(dir)?;
+        }
+    }
+    output::prepare_dir(&opts.out_dir)?;
+    let layer_dirs: Vec<PathBuf> = anim.regions.iter().map(|r| output::layer_dir(&opts.out_dir, r)).collect();
+    if opts.keep_layers {
+        for d in &layer_dirs {
+            output::prepare_dir(d)?;
+        }
+    }
+    output::remove_stale_temporaries(&opts.out_dir, None);
+    for d in layer_dirs.iter().filter(|d| d.is_dir()) {
+        output::remove_stale_temporaries(d, None);
+    }
+    if let Some(gif) = &opts.gif {
+        // The GIF may be written anywhere: only its own temporary files.
+        let dir = gif.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        output::remove_stale_temporaries(dir, gif.file_name().and_then(|n| n.to_str()));
+    }
+    Ok(layer_dirs)
+}
+
+/// Writes the GIF of `opts` from the frames written in `out_dir` (which also covers resumed
+/// renders and composites).
+fn write_gif(
+    anim: &Animation,
+    opts: &RenderOptions,
+    range: &Range<usize>,
+    background: &Background,
+    progress: &dyn Progress,
+) -> Result<()> {
+    let Some(gif) = &opts.gif else { return Ok(()) };
+    let transparent = matches!(background, Background::Transparent);
+    let options = GifOptions { transparent, ..GifOptions::new(anim.fps) };
+    let mut writer = GifWriter::create(gif, anim.width as usize, anim.height as usize, options)?;
+    for frame in range.clone() {
+        let path = output::frame_path(&opts.out_dir, frame, anim.frames);
+        writer.add_frame(&img::load_rgba(&path)?)?;
+        if !progress.update("gif", frame - range.start + 1, range.len()) {
+            return Err(Error::Cancelled);
+        }
+    }
+    writer.finish()?;
+    Ok(())
+}
+
+/// The progress stage of region `r`: `"NN name"`.
+fn stage_name(anim: &Animation, region: usize) -> String {
+    let r = &anim.regions[region];
+    format!("{:02} {}", r.index, r.name)
+}
+
+/// [`render`] with exemplars and prepared sources shared through `cache` (as in a batch).
+pub fn render_with(
+    anim: &Animation,
+    opts: &RenderOptions,
+    cache: &StyleCache,
+    progress: &dyn Progress,
+) -> Result<RenderSummary> {
+    let start = Instant::now();
+    let range = frame_range(anim, opts)?;
+    let (w, h) = (anim.width as usize, anim.height as usize);
+    let background = background(anim, opts)?;
+    let Prepared { styles_of, region_style, styles } = prepare(anim, opts, &range, None, cache)?;
 
     // Resume: check that there is something to continue, made with the same options, before
     // anything is created or computed.
@@ -305,34 +480,7 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
     let done = if opts.resume { read_progress(&opts.out_dir, fingerprint)?.min(n) } else { 0 };
 
     // Output locations, checked before the work starts.
-    if let Some(gif) = &opts.gif {
-        if gif.is_dir() {
-            return Err(Error::io(
-                gif,
-                std::io::Error::new(std::io::ErrorKind::IsADirectory, "is a directory; --gif needs a file name"),
-            ));
-        }
-        if let Some(dir) = gif.parent().filter(|d| !d.as_os_str().is_empty()) {
-            output::prepare_dir(dir)?;
-        }
-    }
-    output::prepare_dir(&opts.out_dir)?;
-    let layer_dirs: Vec<PathBuf> = anim.regions.iter().map(|r| output::layer_dir(&opts.out_dir, r)).collect();
-    if opts.keep_layers {
-        for d in &layer_dirs {
-            output::prepare_dir(d)?;
-        }
-    }
-    // Temporary files of a run that was killed while writing.
-    output::remove_stale_temporaries(&opts.out_dir, None);
-    for d in layer_dirs.iter().filter(|d| d.is_dir()) {
-        output::remove_stale_temporaries(d, None);
-    }
-    if let Some(gif) = &opts.gif {
-        // The GIF may be written anywhere: only its own temporary files.
-        let dir = gif.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-        output::remove_stale_temporaries(dir, gif.file_name().and_then(|n| n.to_str()));
-    }
+    let layer_dirs = prepare_outputs(anim, opts)?;
     if !opts.resume && state_dir.exists() {
         std::fs::remove_dir_all(&state_dir).map_err(|e| Error::io(&state_dir, e))?;
     }
@@ -354,14 +502,8 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
                 // Nothing left to synthesize when every frame was done (only the GIF was missing).
                 Some(s) if done < n => {
                     let st = &styles[s];
-                    let first = range.start;
-                    let strokes = opts.strokes;
-                    let stream = GuideStream::new(
-                        n,
-                        |k| Ok(target_fill(&anim.render(region, first + k)?, strokes).map(|c| c[3])),
-                        st.params.guide(),
-                    )?;
-                    (Some(Synthesizer::new(st.source.clone(), st.params.clone())?), Some(stream))
+                    let (synth, stream) = start_layer(anim, opts, region, &range, st)?;
+                    (Some(synth), Some(stream))
                 }
                 _ => (None, None),
             };
@@ -369,7 +511,7 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
         })
         .collect::<Result<_>>()?;
 
-    let stages: Vec<String> = anim.regions.iter().map(|r| format!("{:02} {}", r.index, r.name)).collect();
+    let stages: Vec<String> = (0..anim.regions.len()).map(|r| stage_name(anim, r)).collect();
     if done > 0 {
         restore(&state_dir, done, &mut layers, &stages)?;
         for l in layers.iter_mut() {
@@ -400,13 +542,9 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
                     return Ok((None, rf));
                 };
                 let t0 = Instant::now();
-                let g = guides.next().ok_or_else(|| Error::Empty {
-                    path: anim.path.clone(),
-                    what: format!("the guides ended before frame {}", frame + 1),
-                })??;
-                let out = synth.step(&g)?;
-                let flat = target_fill(&rf, opts.strokes);
-                let layer = composite::recolor_with(&out.rgb, &out.mask, &flat, &styles[s].pigment, opts.recolor)?;
+                let out = next_frame(anim, synth, guides, frame)?;
+                let layer =
+                    recolor_paint(&paint::Paint::from_frame(&out.rgb, &out.mask), &rf, &styles[s].pigment, opts)?;
                 l.seconds += t0.elapsed().as_secs_f64();
                 // This layer's bar moves as soon as its frame is done; the frame is only
                 // written (and the state saved) once every layer has it.
@@ -414,6 +552,7 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
                     return Err(Error::Cancelled);
                 }
                 if opts.eval {
+                    let flat = target_fill(&rf, opts.strokes);
                     let rgba: Vec<u8> = out
                         .rgb
                         .data()
@@ -430,26 +569,7 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
                 Ok((Some(layer), rf))
             })
             .collect::<Result<_>>()?;
-        // Bottom to top: regions are listed top-most first.
-        let frames: Vec<LayerFrame> = results
-            .iter()
-            .rev()
-            .map(|(st, rf)| match st {
-                Some(l) => LayerFrame::stylized(l, rf.strokes.as_ref()),
-                None => LayerFrame::flat(&rf.fill, rf.strokes.as_ref()),
-            })
-            .collect();
-        let image = composite::composite(w, h, &background, &frames, opts.strokes)?;
-        if opts.keep_layers {
-            for ((st, rf), dir) in results.iter().zip(&layer_dirs) {
-                let layer = match st {
-                    Some(l) => l.to_rgba(),
-                    None => rf.fill.clone(),
-                };
-                output::write_frame(dir, frame, anim.frames, &layer)?;
-            }
-        }
-        output::write_frame(&opts.out_dir, frame, anim.frames, &image)?;
+        write_composite(anim, opts, &background, frame, &results, &layer_dirs)?;
         save_state(&state_dir, fingerprint, k + 1, &layers, &stages)?;
         written += 1;
         if !progress.update(total_stage, k + 1, n) {
@@ -457,21 +577,9 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
         }
     }
 
-    // GIF from the written frames (which also covers resumed renders).
-    if let Some(gif) = &opts.gif {
-        let transparent = matches!(background, Background::Transparent);
-        let options = GifOptions { transparent, ..GifOptions::new(anim.fps) };
-        let mut writer = GifWriter::create(gif, w, h, options)?;
-        for frame in range.clone() {
-            let path = output::frame_path(&opts.out_dir, frame, anim.frames);
-            writer.add_frame(&img::load_rgba(&path)?)?;
-            if !progress.update("gif", frame - range.start + 1, n) {
-                return Err(Error::Cancelled);
-            }
-        }
-        writer.finish()?;
-    }
-    let _ = std::fs::remove_dir_all(&state_dir);
+    write_gif(anim, opts, &range, &background, progress)?;
+    // The progress file stays (it says the render is complete, for a later --resume).
+    finish_state(&state_dir, n, &layers, &stages);
 
     let mut summaries = Vec::with_capacity(layers.len());
     for l in &layers {
@@ -496,6 +604,38 @@ pub fn render(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -
         gif: opts.gif.clone(),
         layers: summaries,
     })
+}
+
+/// The synthesizer and guide stream of one stylized region over `range`.
+fn start_layer(
+    anim: &Animation,
+    opts: &RenderOptions,
+    region: usize,
+    range: &Range<usize>,
+    style: &Style,
+) -> Result<(Synthesizer, GuideStream)> {
+    let first = range.start;
+    let strokes = opts.strokes;
+    let stream = GuideStream::new(
+        range.len(),
+        |k| Ok(target_fill(&anim.render(region, first + k)?, strokes).map(|c| c[3])),
+        style.params.guide(),
+    )?;
+    Ok((Synthesizer::new(style.source.clone(), style.params.clone())?, stream))
+}
+
+/// Synthesizes the next frame (animation frame `frame`) of a layer.
+fn next_frame(
+    anim: &Animation,
+    synth: &mut Synthesizer,
+    guides: &mut GuideStream,
+    frame: usize,
+) -> Result<crate::synth::SynthFrame> {
+    let g = guides.next().ok_or_else(|| Error::Empty {
+        path: anim.path.clone(),
+        what: format!("the guides ended before frame {}", frame + 1),
+    })??;
+    synth.step(&g)
 }
 
 fn evaluate_layer(l: &Layer, style: &Style, w: usize, h: usize) -> Result<eval::Report> {
@@ -561,6 +701,15 @@ fn save_state(dir: &Path, fingerprint: u64, done: usize, layers: &[Layer], stage
         }
     }
     Ok(())
+}
+
+/// Removes the per-layer states of a completed render of `n` frames; the progress file stays.
+fn finish_state(dir: &Path, n: usize, layers: &[Layer], stages: &[String]) {
+    for (l, stage) in layers.iter().zip(stages) {
+        if l.synth.is_some() {
+            let _ = std::fs::remove_file(state_file(dir, stage, n));
+        }
+    }
 }
 
 /// Reads the progress of an interrupted render in `out_dir`: how many frames were done.

@@ -87,6 +87,15 @@ fn frame_names(range: std::ops::RangeInclusive<usize>) -> Vec<String> {
     range.map(|k| format!("{k:04}.png")).collect()
 }
 
+/// The files a complete render leaves: its frames and the record that it is complete (for a
+/// later `--resume`), sorted.
+fn complete(frames: std::ops::RangeInclusive<usize>) -> Vec<String> {
+    let mut v = frame_names(frames);
+    v.extend([".fluidymation".to_string(), ".fluidymation/progress.toml".to_string()]);
+    v.sort();
+    v
+}
+
 /// The bytes of every `NNNN.png` in `dir`, by name.
 fn png_bytes(dir: &Path) -> BTreeMap<String, Vec<u8>> {
     tree(dir)
@@ -185,9 +194,10 @@ fn demo_renders_frames_layers_and_gif() {
         render(&demo(), &out, &["--frames", "1..6", "--scale", "0.5", "--keep-layers", "--gif", gif.to_str().unwrap()]);
     assert_success(&o);
 
-    // Exactly the frames, the GIF and the layers; no temporary files, no resume state.
+    // Exactly the frames, the GIF and the layers; no temporary files, no resume state but
+    // the record that the render is complete.
     let slugs = ["01_arm", "02_head", "03_scarf", "04_dress", "05_legs"];
-    let mut expected = frame_names(1..=6);
+    let mut expected = complete(1..=6);
     expected.push("demo.gif".into());
     expected.push("layers".into());
     for s in slugs {
@@ -372,7 +382,7 @@ fn glaze_takes_each_layer_fill_hue_with_any_exemplar() {
     .unwrap();
     let o = render(&quads(), &out, &["--scale", "0.5", "--frames", "1..4", "--styles", styles.to_str().unwrap()]);
     assert_success(&o);
-    assert_eq!(tree(&out), frame_names(1..=4));
+    assert_eq!(tree(&out), complete(1..=4));
     let err = stderr(&o);
     for (layer, exemplar) in
         [("red", "rose-burst"), ("green", "yellow-granules"), ("blue", "blue-bloom"), ("orange", "(flat)")]
@@ -486,7 +496,8 @@ fn interrupted_renders_resume_to_the_same_bytes() {
     let full = tmp.join("full");
     let gif = full.join("demo.gif");
     assert_success(&render(&demo(), &full, &[&args[..], &["--gif", gif.to_str().unwrap()]].concat()));
-    assert!(!full.join(".fluidymation").exists(), "the resume state is removed after success");
+    let state = tree(&full.join(".fluidymation"));
+    assert_eq!(state, ["progress.toml"], "only the record that the render is complete stays");
 
     let out = tmp.join("out");
     let state = out.join(".fluidymation");
@@ -681,7 +692,7 @@ fn frames_past_the_end_are_clipped_with_a_warning() {
     assert_success(&o);
     let err = stderr(&o);
     assert!(err.contains("warning:") && err.contains("only 8 frames"), "{err}");
-    assert_eq!(tree(&out), frame_names(7..=8));
+    assert_eq!(tree(&out), complete(7..=8));
 }
 
 #[test]

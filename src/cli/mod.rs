@@ -4,7 +4,9 @@ pub mod bench;
 pub mod eval;
 pub mod exemplar;
 pub mod inspect;
+pub mod jobs;
 pub mod params;
+pub mod plan;
 pub mod progress;
 pub mod render;
 pub mod synth;
@@ -43,6 +45,32 @@ impl log::Log for Logger {
     }
     fn flush(&self) {}
 }
+
+/// When the environment variable [`EXIT_WITH_PARENT`] is `1`, stops this process soon after
+/// the process that started it has ended. A job scheduler sets it: a worker that dies must
+/// not leave its job running on (the job is retried elsewhere; everything it writes is
+/// written atomically, so stopping it anywhere loses at most the frame in progress).
+pub fn exit_with_parent() {
+    #[cfg(unix)]
+    if std::env::var(EXIT_WITH_PARENT).is_ok_and(|v| v == "1") {
+        let parent = std::os::unix::process::parent_id();
+        std::thread::spawn(move || {
+            loop {
+                std::thread::sleep(std::time::Duration::from_millis(200));
+                if std::os::unix::process::parent_id() != parent {
+                    let _ = writeln!(
+                        std::io::stderr(),
+                        "error: the process that started this job ({parent}) has ended; stopping"
+                    );
+                    std::process::exit(1);
+                }
+            }
+        });
+    }
+}
+
+/// See [`exit_with_parent`].
+pub const EXIT_WITH_PARENT: &str = "FLUIDYMATION_EXIT_WITH_PARENT";
 
 /// Routes the library's `log` messages to stderr (`warning: …`).
 pub fn init_logging(quiet: bool, verbose: u8) {

@@ -132,6 +132,42 @@ impl SynthFlags {
     }
 }
 
+impl SynthFlags {
+    /// The flags as command-line arguments that parse back to the same values (numbers are
+    /// written in their shortest exact form), for the jobs of a plan.
+    pub fn to_args(&self) -> Vec<String> {
+        let mut out = vec!["--seed".to_string(), self.seed.to_string()];
+        let mut push = |flag: &str, value: Option<String>| {
+            if let Some(v) = value {
+                out.push(format!("--{flag}"));
+                out.push(v);
+            }
+        };
+        push("dist-weight", self.dist_weight.map(|v| v.to_string()));
+        push("flow-weight", self.flow_weight.map(|v| v.to_string()));
+        push("prev-weight", self.prev_weight.map(|v| v.to_string()));
+        push("lambda", self.lambda.map(|v| v.to_string()));
+        push("occ-radius", self.occ_radius.map(|v| v.to_string()));
+        push("border-width", self.border_width.map(|v| v.to_string()));
+        push("blur-sigma", self.blur_sigma.map(|v| v.to_string()));
+        push("time-blur-sigma", self.time_blur_sigma.map(|v| v.to_string()));
+        push("patchmatch-iterations", self.patchmatch_iterations.clone());
+        push("opt-iterations", self.opt_iterations.clone());
+        push("src-speed", self.src_speed.map(|v| v.to_string()));
+        push("src-scale", self.src_scale.map(|v| v.to_string()));
+        push("target-scale", self.target_scale.map(|v| v.to_string()));
+        push("prev-modulation-bounds", self.prev_modulation_bounds.clone());
+        push("vote-sigma", self.vote_sigma.map(|v| v.to_string()));
+        if self.optimize_finest {
+            out.push("--optimize-finest".into());
+        }
+        if self.no_thin_fit {
+            out.push("--no-thin-fit".into());
+        }
+        out
+    }
+}
+
 /// Parses a 1-based inclusive frame range "A..B", "A..", "..B" or "N" into a 0-based range
 /// clipped to `0..total`.
 pub fn parse_frames(spec: Option<&str>, total: usize) -> Result<std::ops::Range<usize>> {
@@ -176,6 +212,31 @@ mod tests {
         assert!(parse_frames(Some("0..3"), 10).is_err());
         assert!(parse_frames(Some("11..12"), 10).is_err());
         assert!(parse_frames(Some("x"), 10).is_err());
+    }
+
+    #[test]
+    fn flags_survive_the_round_trip_through_arguments() {
+        use clap::Parser;
+        #[derive(clap::Parser)]
+        struct Cli {
+            #[command(flatten)]
+            flags: SynthFlags,
+        }
+        let flags = SynthFlags {
+            seed: 42,
+            dist_weight: Some(0.1 + 0.2),
+            lambda: Some(1.0 / 3.0),
+            occ_radius: Some(3),
+            patchmatch_iterations: Some("6,4".into()),
+            prev_modulation_bounds: Some("10,2".into()),
+            vote_sigma: Some(0.0),
+            optimize_finest: true,
+            ..Default::default()
+        };
+        let args = flags.to_args();
+        let back = Cli::try_parse_from(std::iter::once("x".to_string()).chain(args.clone())).unwrap().flags;
+        assert_eq!(back.to_args(), args);
+        assert_eq!(back.params().unwrap(), flags.params().unwrap());
     }
 
     #[test]

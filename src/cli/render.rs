@@ -1,32 +1,24 @@
-//! `fluidymation render`: the whole pipeline, as motion designers run it.
+//! `fluidymation render`: the whole pipeline, as motion designers run it, for one file or a
+//! batch; and the options it shares with `plan`, `render-layer` and `composite`.
 
 use super::Ctx;
 use super::params::{SynthFlags, parse_frames, set_threads};
 use anyhow::{Context, Result, bail};
-use fluidymation::anim::{self, LoadOptions};
+use fluidymation::anim::{self, Animation, LoadOptions};
 use fluidymation::composite::{Recolor, StrokeMode};
-use fluidymation::render::{self, RenderOptions};
+use fluidymation::render::{self, RenderOptions, RenderSummary};
 use fluidymation::{Error, Progress};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-/// Arguments of `render`.
-#[derive(clap::Args, Debug)]
-// `--target-scale` is `synth`'s; `render` has `--scale`.
-#[command(mut_arg("target_scale", |a| a.hide(true)))]
-pub struct Args {
-    /// A Lottie .json file, a directory or glob of SVG frames, or a directory of PNG masks.
-    pub input: PathBuf,
-    /// Output directory for the frames (NNNN.png, 0001 = the first frame).
-    #[arg(long, short = 'o', value_name = "OUT_DIR")]
-    pub output: PathBuf,
-    /// Also write an animated GIF.
-    #[arg(long, value_name = "FILE")]
-    pub gif: Option<PathBuf>,
+/// What to render and how: the options `render`, `plan`, `render-layer` and `composite`
+/// share.
+#[derive(clap::Args, Debug, Clone)]
+pub struct RenderArgs {
     /// Style of one layer: LAYER=EXEMPLAR, LAYER a name or 1-based index, EXEMPLAR a name,
     /// a folder, or "none" to leave the layer flat. Repeat for more layers.
     #[arg(long, value_name = "LAYER=EXEMPLAR")]
@@ -34,7 +26,8 @@ pub struct Args {
     /// Exemplar of every layer not given a --style [default: the bundled blue-bloom].
     #[arg(long, short = 'e', value_name = "NAME|DIR")]
     pub exemplar: Option<String>,
-    /// A TOML file of styles: `default = "NAME"` and a `[layers]` table of LAYER = "EXEMPLAR".
+    /// A TOML file of styles: `default = "NAME"`, a `[layers]` table of LAYER = "EXEMPLAR",
+    /// and per input file `[files."walk.json"]` with its own `default` and `layers`.
     #[arg(long, value_name = "FILE.toml")]
     pub styles: Option<PathBuf>,
     /// Background: a color (#rrggbb or a name), "none" (transparent), or an image file
@@ -54,19 +47,9 @@ pub struct Args {
     /// Frames to render, 1-based inclusive: A..B, A.., ..B or N [default: all].
     #[arg(long, value_name = "A..B")]
     pub frames: Option<String>,
-    /// Worker threads [default: all cores]. The output does not depend on it.
-    #[arg(long, value_name = "N")]
-    pub threads: Option<usize>,
     /// Also write every layer alone (RGBA) under OUT_DIR/layers/NN_name/.
     #[arg(long)]
     pub keep_layers: bool,
-    /// Continue an interrupted (Ctrl-C, killed) render into the same OUT_DIR; give the same
-    /// options as the interrupted run.
-    #[arg(long)]
-    pub resume: bool,
-    /// Measure each stylized layer against its exemplar afterwards and print the numbers.
-    #[arg(long)]
-    pub eval: bool,
     /// Make each layer inside a precomp a region of its own.
     #[arg(long)]
     pub split_precomps: bool,
@@ -77,48 +60,347 @@ pub struct Args {
     pub flags: SynthFlags,
 }
 
+/// Arguments of `render`.
+#[derive(clap::Args, Debug)]
+// `--target-scale` is `synth`'s; `render` has `--scale`.
+#[command(mut_arg("target_scale", |a| a.hide(true)))]
+pub struct Args {
+    /// Lottie .json files, directories or quoted globs of SVG frames, or directories of PNG
+    /// masks. With several, each is written to OUT_DIR/<name>/.
+    #[arg(required = true, value_name = "INPUT")]
+    pub inputs: Vec<PathBuf>,
+    /// Output directory for the frames (NNNN.png, 0001 = the first frame); with several
+    /// inputs, the folder of one sub-folder per input.
+    #[arg(long, short = 'o', value_name = "OUT_DIR")]
+    pub output: PathBuf,
+    /// Also write an animated GIF: to FILE (one input only), or without a value to
+    /// OUT_DIR/<name>.gif for every input.
+    #[arg(long, value_name = "FILE")]
+    pub gif: Option<Option<PathBuf>>,
+    /// Worker threads [default: all cores]. The output does not depend on it.
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+    /// Continue an interrupted (Ctrl-C, killed) render into the same OUT_DIR; give the same
+    /// options as the interrupted run. In a batch, finished files are skipped and files not
+    /// yet started are rendered.
+    #[arg(long)]
+    pub resume: bool,
+    /// Measure each stylized layer against its exemplar afterwards and print the numbers.
+    #[arg(long)]
+    pub eval: bool,
+    /// Files rendered at the same time in a batch (they share the cores; each holds its
+    /// layers in memory).
+    #[arg(long, value_name = "N", default_value_t = 2)]
+    pub parallel_files: usize,
+    #[command(flatten)]
+    pub render: RenderArgs,
+}
+
 #[derive(serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 struct StylesFile {
     default: Option<String>,
     #[serde(default)]
     layers: toml::Table,
+    #[serde(default)]
+    files: BTreeMap<String, FileStylesEntry>,
 }
 
-/// A styles file's default exemplar and per-layer `(LAYER, EXEMPLAR)` pairs.
-type Styles = (Option<String>, Vec<(String, String)>);
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FileStylesEntry {
+    default: Option<String>,
+    #[serde(default)]
+    layers: toml::Table,
+}
 
-fn read_styles(path: &Path) -> Result<Styles> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("could not read the styles file '{}'", path.display()))?;
-    let file: StylesFile =
-        toml::from_str(&text).with_context(|| format!("'{}' is not a valid styles file", path.display()))?;
+/// A styles file: a default exemplar and per-layer styles for every input, and the same per
+/// input file.
+pub struct Styles {
+    path: PathBuf,
+    default: Option<String>,
+    layers: Vec<(String, String)>,
+    /// `[files."KEY"]`: the key, its default and its layers.
+    files: Vec<(String, Option<String>, Vec<(String, String)>)>,
+}
+
+fn layer_table(path: &Path, table: toml::Table, within: &str) -> Result<Vec<(String, String)>> {
     let mut out = Vec::new();
-    for (k, v) in file.layers {
+    for (k, v) in table {
         let Some(s) = v.as_str() else {
             bail!(
-                "'{}': layer '{}' must be given an exemplar name as a string, e.g. {} = \"blue-bloom\"",
+                "'{}': layer '{}'{} must be given an exemplar name as a string, e.g. {} = \"blue-bloom\"",
                 path.display(),
                 k,
+                within,
                 k
             );
         };
         out.push((k, s.to_string()));
     }
-    Ok((file.default, out))
+    Ok(out)
 }
 
-/// Progress bars: one per layer and a total with ETA, on a terminal only.
-struct Bars {
+impl Styles {
+    /// Reads a styles file.
+    pub fn read(path: &Path) -> Result<Styles> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("could not read the styles file '{}'", path.display()))?;
+        let file: StylesFile =
+            toml::from_str(&text).with_context(|| format!("'{}' is not a valid styles file", path.display()))?;
+        let layers = layer_table(path, file.layers, "")?;
+        let mut files = Vec::new();
+        for (key, entry) in file.files {
+            let within = format!(" in [files.\"{key}\".layers]");
+            files.push((key, entry.default, layer_table(path, entry.layers, &within)?));
+        }
+        Ok(Styles { path: path.to_path_buf(), default: file.default, layers, files })
+    }
+
+    /// Whether the `[files."KEY"]` key names `input`: its file name, the path as given, or
+    /// the path relative to the styles file.
+    fn matches(&self, key: &str, input: &Path) -> bool {
+        if input.file_name().is_some_and(|n| n == key) || input == Path::new(key) {
+            return true;
+        }
+        let beside = self.path.parent().unwrap_or(Path::new(".")).join(key);
+        matches!((std::fs::canonicalize(beside), std::fs::canonicalize(input)), (Ok(a), Ok(b)) if a == b)
+    }
+
+    /// The `[files]` entry of `input`, if any.
+    fn file(&self, input: &Path) -> Option<&(String, Option<String>, Vec<(String, String)>)> {
+        self.files.iter().find(|(k, _, _)| self.matches(k, input))
+    }
+}
+
+/// The name of an input's output folder and GIF in a batch: the file's stem, a folder's
+/// name, a glob's folder.
+pub fn input_stem(input: &Path) -> String {
+    let p = if fluidymation::seq::is_glob(input) { input.parent().unwrap_or(input) } else { input };
+    let name = if p.is_dir() { p.file_name() } else { p.file_stem() };
+    name.map(|n| n.to_string_lossy().into_owned()).filter(|n| !n.is_empty()).unwrap_or_else(|| "input".into())
+}
+
+/// Where each input goes: `(folder of its frames, its GIF)`. One input is written to
+/// `out` itself (and `--gif FILE` is allowed); several to `out/<stem>/` and
+/// `out/<stem>.gif`. Two inputs with the same stem are an error. `gif` is `--gif`: absent,
+/// without a value, or with a file name.
+pub fn output_layout(
+    inputs: &[PathBuf],
+    out: &Path,
+    gif: Option<Option<&Path>>,
+) -> Result<Vec<(PathBuf, Option<PathBuf>)>> {
+    let stems: Vec<String> = inputs.iter().map(|i| input_stem(i)).collect();
+    let named_gif = gif.flatten();
+    if inputs.len() == 1 {
+        let gif = gif.map(|_| named_gif.map_or_else(|| out.join(format!("{}.gif", stems[0])), Path::to_path_buf));
+        return Ok(vec![(out.to_path_buf(), gif)]);
+    }
+    if let Some(g) = named_gif {
+        bail!(
+            "--gif '{}': with several inputs each GIF is written to OUT_DIR/<name>.gif; give --gif without a file \
+             name (after the inputs)",
+            g.display()
+        );
+    }
+    for (i, s) in stems.iter().enumerate() {
+        if let Some(j) = stems[..i].iter().position(|t| t == s) {
+            bail!(
+                "'{}' and '{}' would both be written to '{}': rename one, or render them in separate runs",
+                inputs[j].display(),
+                inputs[i].display(),
+                out.join(s).display()
+            );
+        }
+    }
+    Ok(stems.iter().map(|s| (out.join(s), gif.map(|_| out.join(format!("{s}.gif"))))).collect())
+}
+
+/// Loads one input with the scale and precomp options, printing its warnings.
+pub fn load_input(input: &Path, args: &RenderArgs) -> Result<Animation> {
+    let load = LoadOptions { scale: args.scale, split_precomps: args.split_precomps };
+    let anim = anim::load(input, &load).with_context(|| format!("could not load '{}'", input.display()))?;
+    for w in &anim.warnings {
+        log::warn!("{}: {}", input.display(), w);
+    }
+    for r in &anim.regions {
+        for w in &r.warnings {
+            log::warn!("{}: layer '{}': {}", input.display(), r.name, w);
+        }
+    }
+    Ok(anim)
+}
+
+/// Parses `--style LAYER=EXEMPLAR` values.
+fn style_flags(args: &RenderArgs) -> Result<Vec<(String, String)>> {
+    args.style
+        .iter()
+        .map(|s| {
+            let Some((layer, ex)) = s.split_once('=') else {
+                bail!("--style '{}': expected LAYER=EXEMPLAR, e.g. --style body=ink-rims", s);
+            };
+            Ok((layer.trim().to_string(), ex.trim().to_string()))
+        })
+        .collect()
+}
+
+/// Checks the layers that `--style` and the styles file's `[layers]` name for every input:
+/// each must be a layer of at least one of `anims`.
+pub fn check_layer_keys(args: &RenderArgs, styles: Option<&Styles>, anims: &[&Animation]) -> Result<()> {
+    let Some(first) = anims.first() else { return Ok(()) };
+    let has = |key: &str| anims.iter().any(|a| a.find_region(key).is_ok());
+    if let Some(s) = styles {
+        for (layer, _) in &s.layers {
+            if !has(layer) {
+                let err = first.find_region(layer).err().map(anyhow::Error::new).unwrap_or_else(|| anyhow::anyhow!(""));
+                return Err(err.context(format!("in the styles file '{}'", s.path.display())));
+            }
+        }
+    }
+    for (layer, _) in style_flags(args)? {
+        if !has(&layer) {
+            let err = first.find_region(&layer).err().map(anyhow::Error::new).unwrap_or_else(|| anyhow::anyhow!(""));
+            return Err(err.context(format!("--style {layer}=…")));
+        }
+    }
+    Ok(())
+}
+
+/// The options of one input: its output folder and GIF, and the styles that apply to it
+/// (from the most to the least specific: `--style`, the styles file's `[files."NAME".layers]`,
+/// its `[layers]`, `--exemplar`, `[files."NAME"].default`, `default`, the bundled default).
+pub fn file_options(
+    anim: &Animation,
+    input: &Path,
+    out_dir: PathBuf,
+    gif: Option<PathBuf>,
+    args: &RenderArgs,
+    styles: Option<&Styles>,
+) -> Result<RenderOptions> {
+    let frames = parse_frames(args.frames.as_deref(), anim.frames)?;
+    if let Some(end) =
+        args.frames.as_deref().and_then(|f| f.split_once("..")).and_then(|(_, b)| b.trim().parse::<usize>().ok())
+        && end > anim.frames
+    {
+        log::warn!(
+            "--frames '{}': '{}' has only {} frames; rendering {}..{}",
+            args.frames.as_deref().unwrap_or_default(),
+            input.display(),
+            anim.frames,
+            frames.start + 1,
+            frames.end
+        );
+    }
+    let mut opts = RenderOptions::new(out_dir, frames);
+    if let Some(s) = styles {
+        opts.default_style = s.default.clone();
+        opts.styles.extend(s.layers.iter().filter(|(layer, _)| anim.find_region(layer).is_ok()).cloned());
+        if let Some((key, default, layers)) = s.file(input) {
+            if default.is_some() {
+                opts.default_style = default.clone();
+            }
+            for (layer, ex) in layers {
+                anim.find_region(layer).with_context(|| {
+                    format!("in the styles file '{}', [files.\"{}\".layers]", s.path.display(), key)
+                })?;
+                opts.styles.push((layer.clone(), ex.clone()));
+            }
+        }
+    }
+    if let Some(e) = &args.exemplar {
+        let file_default = styles.and_then(|s| s.file(input)).and_then(|(_, d, _)| d.as_ref());
+        if file_default.is_none() {
+            opts.default_style = Some(e.clone());
+        }
+    }
+    for (layer, ex) in style_flags(args)? {
+        if anim.find_region(&layer).is_ok() {
+            opts.styles.push((layer, ex));
+        }
+    }
+    opts.gif = gif;
+    opts.exemplar_dirs = args.exemplar_dir.clone();
+    opts.background = args.background.clone();
+    // Mask sequences are white on nothing: glazed in their own color they would not show.
+    let masks_only = anim.regions.iter().all(|r| r.kind == anim::RegionKind::MaskSequence);
+    opts.recolor = args.recolor.unwrap_or(if masks_only { Recolor::None } else { Recolor::Glaze });
+    if opts.recolor == Recolor::Glaze {
+        let paper = match args.background.as_deref() {
+            None => Some(anim.background.as_ref().map(|b| b.color).unwrap_or([1.0; 4])),
+            Some(spec) => fluidymation::composite::parse_color(spec),
+        };
+        for (i, r) in anim.regions.iter().enumerate() {
+            // The last --style naming the layer wins, else the default.
+            let style = opts.styles.iter().rev().find(|(k, _)| anim.find_region(k).ok() == Some(i)).map(|(_, e)| e);
+            let flat = style.or(opts.default_style.as_ref()).is_some_and(|e| e == render::NO_STYLE);
+            if let Some(p) = paper
+                && !flat
+                && (0..3).all(|i| (r.color[i] - p[i]).abs() < 0.02)
+            {
+                log::warn!(
+                    "layer '{}' has the background's color: a glaze of it does not show; \
+                     try --recolor none (the exemplar's colors) or another --background",
+                    r.name
+                );
+            }
+        }
+    }
+    opts.strokes = args.strokes;
+    opts.params = args.flags.params()?;
+    opts.scale = args.scale;
+    opts.keep_layers = args.keep_layers;
+    Ok(opts)
+}
+
+/// Checks the options every command that renders shares, before any input is read.
+pub fn check_args(args: &RenderArgs) -> Result<Option<Styles>> {
+    if args.flags.target_scale.is_some() {
+        bail!("--target-scale is for `synth`; use --scale with `render`");
+    }
+    args.flags.params()?;
+    style_flags(args)?;
+    args.styles.as_deref().map(Styles::read).transpose()
+}
+
+/// Several SVG files given as inputs are most likely the frames of one sequence, expanded by
+/// the shell.
+fn check_svg_frames(inputs: &[PathBuf]) -> Result<()> {
+    let svg = |p: &PathBuf| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg")) && p.is_file();
+    if inputs.len() > 1 && inputs.iter().all(svg) {
+        bail!(
+            "{} SVG files were given as {} inputs; an SVG animation is a folder of frames: give the folder, or \
+             quote the glob ('{}/*.svg') so the shell does not expand it",
+            inputs.len(),
+            inputs.len(),
+            inputs[0].parent().unwrap_or(Path::new(".")).display()
+        );
+    }
+    Ok(())
+}
+
+/// Progress bars: one per layer (or per file in a batch) and a total with ETA, on a
+/// terminal only.
+pub struct Bars {
     multi: Option<MultiProgress>,
     bars: Mutex<HashMap<String, ProgressBar>>,
     interrupted: &'static AtomicBool,
 }
 
 impl Bars {
+    /// Bars on stderr unless `quiet` or stderr is not a terminal; `interrupted` stops the
+    /// work.
+    pub fn new(quiet: bool) -> Bars {
+        let show = !quiet && std::io::stderr().is_terminal();
+        Bars {
+            multi: show.then(|| MultiProgress::with_draw_target(ProgressDrawTarget::stderr())),
+            bars: Mutex::new(HashMap::new()),
+            interrupted: &INTERRUPTED,
+        }
+    }
+
     /// Removes every bar from the terminal. Bars that are only dropped draw themselves once
     /// more (indicatif's default), which left a stale bar above the summary or the error.
-    fn clear(&self) {
+    pub fn clear(&self) {
         if let Ok(bars) = self.bars.lock() {
             for bar in bars.values() {
                 bar.finish_and_clear();
@@ -157,102 +439,73 @@ impl Progress for Bars {
     }
 }
 
+/// The progress of one file of a batch: its frames as one bar named after the file, and
+/// the sum over the files as the total.
+struct FileProgress<'a> {
+    bars: &'a Bars,
+    name: String,
+    file: usize,
+    counts: &'a Mutex<Vec<(usize, usize)>>,
+}
+
+impl Progress for FileProgress<'_> {
+    fn update(&self, stage: &str, done: usize, total: usize) -> bool {
+        if stage != "frames" {
+            return !self.bars.interrupted.load(Ordering::SeqCst);
+        }
+        self.bars.update(&self.name, done, total);
+        let (sum, all) = {
+            let mut counts = self.counts.lock().unwrap_or_else(|e| e.into_inner());
+            counts[self.file] = (done, total);
+            counts.iter().fold((0, 0), |(a, b), (d, t)| (a + d, b + t))
+        };
+        self.bars.update("frames", sum, all)
+    }
+}
+
 static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
-/// Runs `render`.
-pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
-    set_threads(args.threads)?;
-    if args.flags.target_scale.is_some() {
-        bail!("--target-scale is for `synth`; use --scale with `render`");
-    }
-    let params = args.flags.params()?;
-    let load = LoadOptions { scale: args.scale, split_precomps: args.split_precomps };
-    let anim = anim::load(&args.input, &load).with_context(|| format!("could not load '{}'", args.input.display()))?;
-    for w in &anim.warnings {
-        log::warn!("{}: {}", args.input.display(), w);
-    }
-    for r in &anim.regions {
-        for w in &r.warnings {
-            log::warn!("layer '{}': {}", r.name, w);
-        }
-    }
-    let frames = parse_frames(args.frames.as_deref(), anim.frames)?;
-    if let Some(end) =
-        args.frames.as_deref().and_then(|f| f.split_once("..")).and_then(|(_, b)| b.trim().parse::<usize>().ok())
-        && end > anim.frames
-    {
-        log::warn!(
-            "--frames '{}': the input has only {} frames; rendering {}..{}",
-            args.frames.as_deref().unwrap_or_default(),
-            anim.frames,
-            frames.start + 1,
-            frames.end
-        );
-    }
-    let mut opts = RenderOptions::new(args.output.clone(), frames.clone());
-    if let Some(path) = &args.styles {
-        let (default, layers) = read_styles(path)?;
-        for (layer, _) in &layers {
-            anim.find_region(layer).with_context(|| format!("in the styles file '{}'", path.display()))?;
-        }
-        opts.default_style = default;
-        opts.styles = layers;
-    }
-    if let Some(e) = &args.exemplar {
-        opts.default_style = Some(e.clone());
-    }
-    for s in &args.style {
-        let Some((layer, ex)) = s.split_once('=') else {
-            bail!("--style '{}': expected LAYER=EXEMPLAR, e.g. --style body=ink-rims", s);
-        };
-        opts.styles.push((layer.trim().to_string(), ex.trim().to_string()));
-    }
-    opts.gif = args.gif.clone();
-    opts.exemplar_dirs = args.exemplar_dir.clone();
-    opts.background = args.background.clone();
-    // Mask sequences are white on nothing: glazed in their own color they would not show.
-    let masks_only = anim.regions.iter().all(|r| r.kind == anim::RegionKind::MaskSequence);
-    opts.recolor = args.recolor.unwrap_or(if masks_only { Recolor::None } else { Recolor::Glaze });
-    if opts.recolor == Recolor::Glaze {
-        let paper = match args.background.as_deref() {
-            None => Some(anim.background.as_ref().map(|b| b.color).unwrap_or([1.0; 4])),
-            Some(spec) => fluidymation::composite::parse_color(spec),
-        };
-        for (i, r) in anim.regions.iter().enumerate() {
-            // The last --style naming the layer wins, else the default.
-            let style = opts.styles.iter().rev().find(|(k, _)| anim.find_region(k).ok() == Some(i)).map(|(_, e)| e);
-            let flat = style.or(opts.default_style.as_ref()).is_some_and(|e| e == render::NO_STYLE);
-            if let Some(p) = paper
-                && !flat
-                && (0..3).all(|i| (r.color[i] - p[i]).abs() < 0.02)
-            {
-                log::warn!(
-                    "layer '{}' has the background's color: a glaze of it does not show; \
-                     try --recolor none (the exemplar's colors) or another --background",
-                    r.name
-                );
-            }
-        }
-    }
-    opts.strokes = args.strokes;
-    opts.params = params;
-    opts.scale = args.scale;
-    opts.keep_layers = args.keep_layers;
-    opts.resume = args.resume;
-    opts.eval = args.eval;
-
-    // The first Ctrl-C stops after the frame in progress (resumable); a second one quits at once.
+/// Installs the Ctrl-C handler: the first Ctrl-C stops after the frame in progress
+/// (resumable); a second one quits at once.
+pub fn handle_interrupts() {
     let _ = ctrlc::set_handler(|| {
         if INTERRUPTED.swap(true, Ordering::SeqCst) {
             std::process::exit(130);
         }
     });
-    let show = !ctx.quiet && std::io::stderr().is_terminal();
-    let bars = Bars {
-        multi: show.then(|| MultiProgress::with_draw_target(ProgressDrawTarget::stderr())),
-        bars: Mutex::new(HashMap::new()),
-        interrupted: &INTERRUPTED,
-    };
+}
+
+/// Runs `render`.
+pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
+    set_threads(args.threads)?;
+    let styles = check_args(&args.render)?;
+    if args.parallel_files == 0 {
+        bail!("--parallel-files 0: expected at least 1");
+    }
+    check_svg_frames(&args.inputs)?;
+    let layout = output_layout(&args.inputs, &args.output, args.gif.as_ref().map(|g| g.as_deref()))?;
+    handle_interrupts();
+    if args.inputs.len() == 1 {
+        let (out_dir, gif) = layout.into_iter().next().expect("one input");
+        return run_one(&args, ctx, &args.inputs[0], out_dir, gif, styles.as_ref());
+    }
+    run_batch(&args, ctx, layout, styles.as_ref())
+}
+
+fn run_one(
+    args: &Args,
+    ctx: &Ctx,
+    input: &Path,
+    out_dir: PathBuf,
+    gif: Option<PathBuf>,
+    styles: Option<&Styles>,
+) -> Result<()> {
+    let anim = load_input(input, &args.render)?;
+    check_layer_keys(&args.render, styles, &[&anim])?;
+    let mut opts = file_options(&anim, input, out_dir, gif, &args.render, styles)?;
+    opts.resume = args.resume;
+    opts.eval = args.eval;
+    let bars = Bars::new(ctx.quiet);
     let result = render::render(&anim, &opts, &bars);
     bars.clear();
     let summary = match result {
@@ -263,18 +516,10 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
                 args.output.display()
             )))
         }
-        Err(e) => return Err(anyhow::Error::new(e).context(format!("could not render '{}'", args.input.display()))),
+        Err(e) => return Err(anyhow::Error::new(e).context(format!("could not render '{}'", input.display()))),
     };
     if !ctx.quiet {
-        eprintln!(
-            "{} frames{} in {:.1} s ({:.2} s/frame) -> {}{}",
-            summary.frames,
-            if summary.resumed > 0 { format!(" (after {} resumed)", summary.resumed) } else { String::new() },
-            summary.seconds,
-            summary.seconds_per_frame(),
-            summary.frame_dir.display(),
-            summary.gif.as_ref().map(|g| format!(", {}", g.display())).unwrap_or_default()
-        );
+        eprintln!("{}", summary_line(&summary));
         for l in &summary.layers {
             eprintln!(
                 "  {:02} {:<20} {:<18} {:.1} s",
@@ -284,15 +529,145 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
                 l.seconds
             );
         }
-        if args.keep_layers {
-            eprintln!("layers -> {}", args.output.join("layers").display());
+        if args.render.keep_layers {
+            eprintln!("layers -> {}", opts.out_dir.join("layers").display());
         }
     }
+    print_eval(&summary, None);
+    Ok(())
+}
+
+/// "48 frames in 12.1 s (0.25 s/frame) -> out, out/demo.gif".
+fn summary_line(summary: &RenderSummary) -> String {
+    let resumed = match (summary.frames, summary.resumed) {
+        (0, r) if r > 0 => " (already complete)".to_string(),
+        (_, 0) => String::new(),
+        (_, r) => format!(" (after {r} resumed)"),
+    };
+    format!(
+        "{} frames{} in {:.1} s ({:.2} s/frame) -> {}{}",
+        summary.frames,
+        resumed,
+        summary.seconds,
+        summary.seconds_per_frame(),
+        summary.frame_dir.display(),
+        summary.gif.as_ref().map(|g| format!(", {}", g.display())).unwrap_or_default()
+    )
+}
+
+fn print_eval(summary: &RenderSummary, file: Option<&Path>) {
     for l in &summary.layers {
         if let Some(r) = &l.eval {
-            println!("== layer {:02} {} ({})", l.index, l.name, l.exemplar.as_deref().unwrap_or(""));
+            let of = file.map(|f| format!("{}: ", f.display())).unwrap_or_default();
+            println!("== {}layer {:02} {} ({})", of, l.index, l.name, l.exemplar.as_deref().unwrap_or(""));
             println!("{}", r);
         }
+    }
+}
+
+fn run_batch(args: &Args, ctx: &Ctx, layout: Vec<(PathBuf, Option<PathBuf>)>, styles: Option<&Styles>) -> Result<()> {
+    let start = std::time::Instant::now();
+    // Load every input; one that fails is reported at the end, the others are rendered.
+    let loaded: Vec<Result<Animation>> = args.inputs.iter().map(|i| load_input(i, &args.render)).collect();
+    let anims: Vec<&Animation> = loaded.iter().filter_map(|a| a.as_ref().ok()).collect();
+    check_layer_keys(&args.render, styles, &anims)?;
+    let mut options: Vec<Result<RenderOptions>> = loaded
+        .iter()
+        .zip(&args.inputs)
+        .zip(layout)
+        .map(|((anim, input), (out_dir, gif))| {
+            let anim = anim.as_ref().map_err(|e| anyhow::anyhow!("{e:#}"))?;
+            let mut opts = file_options(anim, input, out_dir, gif, &args.render, styles)?;
+            opts.eval = args.eval;
+            Ok(opts)
+        })
+        .collect();
+    if args.resume {
+        // Per file: continue what was started, skip what is complete, start the rest.
+        let mut any = false;
+        for opts in options.iter_mut().flatten() {
+            opts.resume = opts.out_dir.join(render::STATE_DIR).join("progress.toml").is_file();
+            any |= opts.resume;
+        }
+        if !any {
+            bail!(
+                "'{}': there is no interrupted render to resume here (none of the {} inputs has one); render \
+                 without --resume",
+                args.output.display(),
+                args.inputs.len()
+            );
+        }
+    }
+
+    let bars = Bars::new(ctx.quiet);
+    let counts = Mutex::new(vec![(0, 0); args.inputs.len()]);
+    let progress: Vec<FileProgress> = args
+        .inputs
+        .iter()
+        .enumerate()
+        .map(|(file, input)| FileProgress {
+            bars: &bars,
+            name: input.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
+            file,
+            counts: &counts,
+        })
+        .collect();
+    let mut jobs = Vec::new();
+    let mut slots = Vec::new();
+    for (i, (anim, opts)) in loaded.iter().zip(&options).enumerate() {
+        if let (Ok(anim), Ok(opts)) = (anim, opts) {
+            slots.push(i);
+            jobs.push((anim, opts, &progress[i] as &dyn Progress));
+        }
+    }
+    let rendered = render::render_batch(&jobs, args.parallel_files);
+    bars.clear();
+    let mut results: Vec<Result<RenderSummary>> = options
+        .iter_mut()
+        .map(|o| match o {
+            Ok(_) => Err(anyhow::anyhow!("not rendered")),
+            Err(e) => Err(anyhow::anyhow!("{e:#}")),
+        })
+        .collect();
+    for (slot, r) in slots.into_iter().zip(rendered) {
+        results[slot] = r.map_err(anyhow::Error::new);
+    }
+
+    // The summary: one line per file, in the order given.
+    let cancelled = results
+        .iter()
+        .any(|r| r.as_ref().err().is_some_and(|e| matches!(e.downcast_ref::<Error>(), Some(Error::Cancelled))));
+    let failed: Vec<&PathBuf> = args.inputs.iter().zip(&results).filter(|(_, r)| r.is_err()).map(|(i, _)| i).collect();
+    if !ctx.quiet || !failed.is_empty() {
+        eprintln!(
+            "{} files in {:.1} s: {} rendered, {} failed",
+            args.inputs.len(),
+            start.elapsed().as_secs_f64(),
+            args.inputs.len() - failed.len(),
+            failed.len()
+        );
+        for (input, r) in args.inputs.iter().zip(&results) {
+            match r {
+                Ok(s) if !ctx.quiet => eprintln!("  ok      {}: {}", input.display(), summary_line(s)),
+                Ok(_) => {}
+                Err(e) => eprintln!("  FAILED  {}: {:#}", input.display(), e),
+            }
+        }
+    }
+    for (input, r) in args.inputs.iter().zip(&results) {
+        if let Ok(s) = r {
+            print_eval(s, Some(input));
+        }
+    }
+    if cancelled {
+        bail!(anyhow::Error::new(Error::Cancelled).context(format!(
+            "interrupted; the finished frames are in '{}' — continue with the same command and --resume",
+            args.output.display()
+        )));
+    }
+    if !failed.is_empty() {
+        let names: Vec<String> = failed.iter().map(|p| format!("'{}'", p.display())).collect();
+        bail!("{} of {} files failed: {}", failed.len(), args.inputs.len(), names.join(", "));
     }
     Ok(())
 }

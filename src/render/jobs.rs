@@ -1,0 +1,393 @@
+//! The render cut into independent jobs: one per stylized layer ([`render_layer`]) and one per
+//! file ([`composite`]), which waits for the file's layers. A job scheduler (see
+//! `fluidymation plan` and `scripts/fluidymation_dask.py`) runs them on many machines that
+//! share the output folder; run in any order that respects that dependency, they give the
+//! same bytes as [`render`](super::render).
+//!
+//! A layer job writes into `OUT_DIR/layers/NN_name/`:
+//! - `paint/NNNN.png`: every frame of the layer painted in the exemplar's colors
+//!   ([`Paint`], 16-bit RGBA, alpha = the synthesized mask);
+//! - `.fluidymation/`: its checkpoints while it runs — a job that is run again (after its
+//!   machine died, say) continues from the last frame it completed;
+//! - [`LAYER_MANIFEST`], written last: the job is complete, and with which options;
+//! - `.lock`: held while the job runs, so that two runs of one job never write at once (the
+//!   second waits for the first and finds its work done).
+
+use super::paint::Paint;
+use super::{
+    Layer, Prepared, RenderOptions, RenderSummary, STATE_DIR, StyleCache, background, fnv, frame_range, next_frame,
+    prepare, prepare_outputs, read_progress, recolor_paint, resolve_styles, restore, save_state, stage_name,
+    start_layer, target_fill, write_composite, write_gif, write_progress,
+};
+use crate::anim::{Animation, RegionFrame};
+use crate::composite::{Pigment, StylizedLayer};
+use crate::error::{Error, Result};
+use crate::img;
+use crate::output;
+use crate::progress::Progress;
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+/// The file a complete layer job leaves in its folder (JSON: input, layer, exemplar, frames
+/// and a fingerprint of the options).
+pub const LAYER_MANIFEST: &str = "layer.json";
+
+/// The folder of a layer's painted frames, inside its layer folder.
+pub const PAINT_DIR: &str = "paint";
+
+const MANIFEST_FORMAT: u32 = 1;
+
+#[derive(serde::Serialize, serde::Deserialize)]
+struct Manifest {
+    format: u32,
+    input: PathBuf,
+    index: usize,
+    layer: String,
+    exemplar: String,
+    /// First and last frame, 1-based.
+    frames: [usize; 2],
+    fingerprint: String,
+}
+
+/// What a layer job did.
+#[derive(Clone, Debug)]
+pub struct LayerJobSummary {
+    /// The layer's 1-based index from the top.
+    pub index: usize,
+    /// The layer's name.
+    pub name: String,
+    /// The exemplar it is painted with.
+    pub exemplar: String,
+    /// The layer's folder.
+    pub dir: PathBuf,
+    /// Frames painted by this run.
+    pub painted: usize,
+    /// Frames found done (by an earlier, interrupted run or a complete one).
+    pub resumed: usize,
+    /// Wall-clock seconds of this run.
+    pub seconds: f64,
+}
+
+/// Everything that decides a layer's painted frames, as one number: the composite checks
+/// that the layers it reads were painted with its own options.
+fn layer_fingerprint(anim: &Animation, opts: &RenderOptions, region: usize, style: &str) -> String {
+    let input = std::fs::canonicalize(&anim.path).unwrap_or_else(|_| anim.path.clone());
+    let r = &anim.regions[region];
+    format!(
+        "{:016x}",
+        fnv(&format!(
+            "layer|{}|{:?}|{}|{}|{}|{:?}|{:?}|{:?}|{}|{}x{}x{}",
+            input.display(),
+            opts.frames.start.min(anim.frames)..opts.frames.end.min(anim.frames),
+            r.index,
+            r.name,
+            style,
+            opts.exemplar_dirs,
+            opts.strokes,
+            opts.params,
+            opts.scale,
+            anim.width,
+            anim.height,
+            anim.frames,
+        ))
+    )
+}
+
+fn read_manifest(path: &Path) -> Result<Manifest> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let m: Manifest = serde_json::from_str(&text)
+        .map_err(|e| Error::Corrupt { path: path.to_path_buf(), message: format!("not a layer manifest: {e}") })?;
+    if m.format != MANIFEST_FORMAT {
+        return Err(Error::Corrupt {
+            path: path.to_path_buf(),
+            message: format!("layer manifest format {} (this version reads {})", m.format, MANIFEST_FORMAT),
+        });
+    }
+    Ok(m)
+}
+
+/// Takes the layer folder's lock, waiting while another run of the same job holds it.
+fn lock(dir: &Path) -> Result<std::fs::File> {
+    let path = dir.join(".lock");
+    let file = std::fs::File::options()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&path)
+        .map_err(|e| Error::io(&path, e))?;
+    match file.try_lock() {
+        Ok(()) => {}
+        Err(std::fs::TryLockError::WouldBlock) => {
+            log::info!("'{}': another run of this layer job is in progress; waiting for it", dir.display());
+            file.lock().map_err(|e| Error::io(&path, e))?;
+        }
+        Err(std::fs::TryLockError::Error(e)) => return Err(Error::io(&path, e)),
+    }
+    Ok(file)
+}
+
+/// Paints region `region` of `anim` (its position in [`Animation::regions`]) as `opts` says,
+/// into `opts.out_dir/layers/NN_name/` (see the [module documentation](self)). A complete job
+/// with the same options is not done again; an interrupted one continues from its last
+/// checkpoint; one made with other options is started over.
+///
+/// Only the options that decide the painting are used: input, frames, scale, styles, strokes,
+/// exemplar folders and engine parameters ([`RenderOptions::gif`], `background`, `recolor`
+/// and `keep_layers` are the composite's).
+pub fn render_layer(
+    anim: &Animation,
+    opts: &RenderOptions,
+    region: usize,
+    progress: &dyn Progress,
+) -> Result<LayerJobSummary> {
+    let start = Instant::now();
+    let range = frame_range(anim, opts)?;
+    let Some(r) = anim.regions.get(region) else {
+        return Err(Error::param("layer", region + 1, format!("a layer number in 1..={}", anim.regions.len())));
+    };
+    let styles_of = resolve_styles(anim, opts)?;
+    let Some(style) = styles_of[region].clone() else {
+        return Err(Error::param(
+            "layer",
+            &r.name,
+            "a stylized layer: this one is left flat (style none), so it has no render-layer job; the composite \
+             job draws it as it is",
+        ));
+    };
+    let n = range.len();
+    let dir = output::layer_dir(&opts.out_dir, r);
+    let mut summary = LayerJobSummary {
+        index: r.index,
+        name: r.name.clone(),
+        exemplar: style.clone(),
+        dir: dir.clone(),
+        painted: 0,
+        resumed: 0,
+        seconds: 0.0,
+    };
+    output::prepare_dir(&dir)?;
+    let _lock = lock(&dir)?;
+    let fingerprint = layer_fingerprint(anim, opts, region, &style);
+    let paint_dir = dir.join(PAINT_DIR);
+    let frame_file = |k: usize| output::frame_path(&paint_dir, range.start + k, anim.frames);
+    let manifest_path = dir.join(LAYER_MANIFEST);
+    if read_manifest(&manifest_path).is_ok_and(|m| m.fingerprint == fingerprint)
+        && (0..n).all(|k| frame_file(k).is_file())
+    {
+        summary.resumed = n;
+        summary.seconds = start.elapsed().as_secs_f64();
+        return Ok(summary);
+    }
+    let Prepared { region_style, styles, .. } = prepare(anim, opts, &range, Some(region), &StyleCache::new())?;
+    let st = &styles[region_style[region].expect("a stylized region is prepared")];
+
+    // The checkpoints: continue when they were made with the same options and their frames
+    // are all there, else start over.
+    let state_dir = dir.join(STATE_DIR);
+    let state_fingerprint = u64::from_str_radix(&fingerprint, 16).unwrap_or_default();
+    let mut done = read_progress(&dir, state_fingerprint).map(|d| d.min(n)).unwrap_or(0);
+    if !(0..done).all(|k| frame_file(k).is_file()) {
+        done = 0;
+    }
+    if manifest_path.exists() {
+        std::fs::remove_file(&manifest_path).map_err(|e| Error::io(&manifest_path, e))?;
+    }
+    if done == 0 {
+        for d in [&paint_dir, &state_dir] {
+            if d.exists() {
+                std::fs::remove_dir_all(d).map_err(|e| Error::io(d, e))?;
+            }
+        }
+    }
+    output::prepare_dir(&paint_dir)?;
+    output::remove_stale_temporaries(&paint_dir, None);
+    output::remove_stale_temporaries(&dir, None);
+    std::fs::create_dir_all(&state_dir).map_err(|e| Error::io(&state_dir, e))?;
+    if done == 0 {
+        write_progress(&state_dir, state_fingerprint, 0)?;
+    }
+
+    let (synth, guides) = start_layer(anim, opts, region, &range, st)?;
+    let mut layers = vec![Layer {
+        region,
+        style: region_style[region],
+        synth: Some(synth),
+        guides: Some(guides),
+        seconds: 0.0,
+        kept: Vec::new(),
+    }];
+    let stages = [stage_name(anim, region)];
+    if done > 0 {
+        restore(&state_dir, done, &mut layers, &stages)?;
+        if let Some(g) = layers[0].guides.as_mut() {
+            for _ in 0..done {
+                g.next().transpose()?;
+            }
+        }
+    }
+    if !progress.update(&stages[0], done, n) {
+        return Err(Error::Cancelled);
+    }
+    for k in done..n {
+        let frame = range.start + k;
+        let l = &mut layers[0];
+        let (Some(synth), Some(guides)) = (l.synth.as_mut(), l.guides.as_mut()) else { unreachable!() };
+        let out = next_frame(anim, synth, guides, frame)?;
+        Paint::from_frame(&out.rgb, &out.mask).save(&frame_file(k))?;
+        save_state(&state_dir, state_fingerprint, k + 1, &layers, &stages)?;
+        if !progress.update(&stages[0], k + 1, n) {
+            return Err(Error::Cancelled);
+        }
+    }
+    let manifest = Manifest {
+        format: MANIFEST_FORMAT,
+        input: std::fs::canonicalize(&anim.path).unwrap_or_else(|_| anim.path.clone()),
+        index: r.index,
+        layer: r.name.clone(),
+        exemplar: style,
+        frames: [range.start + 1, range.end],
+        fingerprint,
+    };
+    let text = serde_json::to_string_pretty(&manifest).expect("a manifest serializes");
+    img::atomic_write(&manifest_path, |w| w.write_all(format!("{text}\n").as_bytes()))?;
+    std::fs::remove_dir_all(&state_dir).map_err(|e| Error::io(&state_dir, e))?;
+    summary.painted = n - done;
+    summary.resumed = done;
+    summary.seconds = start.elapsed().as_secs_f64();
+    Ok(summary)
+}
+
+/// Recolors and composites the layers that [`render_layer`] painted into
+/// `opts.out_dir/layers/` (flat layers are drawn from the animation), writes the frames and
+/// the GIF as [`render`](super::render) does, with `--keep-layers` every layer alone too.
+/// Fails, before writing anything, when a stylized layer is not painted completely or was
+/// painted with other options.
+pub fn composite(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -> Result<RenderSummary> {
+    let start = Instant::now();
+    let range = frame_range(anim, opts)?;
+    let background = background(anim, opts)?;
+    let styles_of = resolve_styles(anim, opts)?;
+    let cache = StyleCache::new();
+    let pigments: Vec<Option<Pigment>> = styles_of
+        .iter()
+        .enumerate()
+        .map(|(region, style)| -> Result<Option<Pigment>> {
+            let Some(style) = style else { return Ok(None) };
+            let r = &anim.regions[region];
+            let dir = output::layer_dir(&opts.out_dir, r);
+            let path = dir.join(LAYER_MANIFEST);
+            let manifest = read_manifest(&path).map_err(|e| match e {
+                Error::Io { .. } => Error::Empty {
+                    path: dir.clone(),
+                    what: format!(
+                        "layer {:02} '{}' is not painted (completely): run its render-layer job first",
+                        r.index, r.name
+                    ),
+                },
+                other => other,
+            })?;
+            if manifest.fingerprint != layer_fingerprint(anim, opts, region, style) {
+                return Err(Error::Corrupt {
+                    path,
+                    message: format!(
+                        "layer {:02} '{}' was painted with other options than this composite's (input, frames, \
+                         style, scale, strokes or engine parameters); run its render-layer job again with the same \
+                         options",
+                        r.index, r.name
+                    ),
+                });
+            }
+            Ok(Some(Pigment::from_exemplar(&cache.exemplar(style, &opts.exemplar_dirs)?)))
+        })
+        .collect::<Result<_>>()?;
+    let layer_dirs = prepare_outputs(anim, opts)?;
+    let (w, h) = (anim.width as usize, anim.height as usize);
+    let n = range.len();
+    let finished = AtomicUsize::new(0);
+    if !progress.update("frames", 0, n) {
+        return Err(Error::Cancelled);
+    }
+    range.clone().into_par_iter().try_for_each(|frame| -> Result<()> {
+        let results: Vec<(Option<StylizedLayer>, RegionFrame)> = (0..anim.regions.len())
+            .into_par_iter()
+            .map(|region| -> Result<(Option<StylizedLayer>, RegionFrame)> {
+                let rf = anim.render(region, frame)?;
+                let Some(pigment) = &pigments[region] else { return Ok((None, rf)) };
+                let dir = output::layer_dir(&opts.out_dir, &anim.regions[region]).join(PAINT_DIR);
+                let path = output::frame_path(&dir, frame, anim.frames);
+                let paint = Paint::load(&path)?;
+                if paint.size() != (w, h) {
+                    return Err(Error::SizeMismatch {
+                        path,
+                        expected: (w as u32, h as u32),
+                        found: (paint.size().0 as u32, paint.size().1 as u32),
+                    });
+                }
+                Ok((Some(recolor_paint(&paint, &rf, pigment, opts)?), rf))
+            })
+            .collect::<Result<_>>()?;
+        write_composite(anim, opts, &background, frame, &results, &layer_dirs)?;
+        let k = finished.fetch_add(1, Ordering::SeqCst) + 1;
+        if !progress.update("frames", k, n) {
+            return Err(Error::Cancelled);
+        }
+        Ok(())
+    })?;
+    write_gif(anim, opts, &range, &background, progress)?;
+    Ok(RenderSummary {
+        frames: n,
+        resumed: 0,
+        seconds: start.elapsed().as_secs_f64(),
+        frame_dir: opts.out_dir.clone(),
+        gif: opts.gif.clone(),
+        layers: anim
+            .regions
+            .iter()
+            .zip(&styles_of)
+            .map(|(r, s)| super::LayerSummary {
+                index: r.index,
+                name: r.name.clone(),
+                exemplar: s.clone(),
+                seconds: 0.0,
+                eval: None,
+            })
+            .collect(),
+    })
+}
+
+/// The estimated cost of one layer's job.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LayerCost {
+    /// The region (position in [`Animation::regions`]).
+    pub region: usize,
+    /// Its style (`None`: left flat, no job).
+    pub style: Option<String>,
+    /// Frames to paint.
+    pub frames: usize,
+    /// Pixels inside the layer's mask (coverage ≥ ½), summed over the frames: what the
+    /// synthesis time grows with. 0 for flat layers.
+    pub masked_pixels: u64,
+}
+
+/// The cost of every region's layer job as `opts` would render it: frames × masked pixels,
+/// from the region's flat renderings (no synthesis).
+pub fn layer_costs(anim: &Animation, opts: &RenderOptions) -> Result<Vec<LayerCost>> {
+    let range = frame_range(anim, opts)?;
+    let styles_of = resolve_styles(anim, opts)?;
+    (0..anim.regions.len())
+        .into_par_iter()
+        .map(|region| -> Result<LayerCost> {
+            let style = styles_of[region].clone();
+            let mut masked = 0u64;
+            if style.is_some() {
+                for frame in range.clone() {
+                    let fill = target_fill(&anim.render(region, frame)?, opts.strokes);
+                    masked += fill.data().iter().filter(|c| c[3] >= 0.5).count() as u64;
+                }
+            }
+            Ok(LayerCost { region, style, frames: range.len(), masked_pixels: masked })
+        })
+        .collect()
+}
