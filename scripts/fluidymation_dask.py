@@ -290,7 +290,8 @@ def main(argv=None):
             progress = "[%*d/%d] %3d%%" % (len(str(len(jobs))), finished, len(jobs), 100 * done_cost // total_cost)
             if f.status == "finished":
                 r = f.result()
-                said = r["message"].splitlines()[-1] if r["message"] else ""
+                # The job's own last line, without the output path the plan already names.
+                said = r["message"].splitlines()[-1].split(" -> ")[0] if r["message"] else ""
                 say("%s  done   %s in %.1f s on %s: %s" % (progress, job["id"], r["seconds"], r["worker"], said))
             else:
                 exc = f.exception()

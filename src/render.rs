@@ -481,6 +481,7 @@ pub fn render_with(
 
     // Output locations, checked before the work starts.
     let layer_dirs = prepare_outputs(anim, opts)?;
+    output::remove_stale_temporaries(&state_dir, None);
     if !opts.resume && state_dir.exists() {
         std::fs::remove_dir_all(&state_dir).map_err(|e| Error::io(&state_dir, e))?;
     }

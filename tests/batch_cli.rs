@@ -423,7 +423,7 @@ fn plan_jobs_run_by_hand_give_the_bytes_of_render() {
     let o = run_job(composites[0]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("not painted") && stderr(&o).contains("render-layer"), "{}", stderr(&o));
-    assert!(!results(&out).keys().any(|k| k.ends_with("0002.png")), "{:?}", results(&out).keys());
+    assert!(!out.exists() || !results(&out).keys().any(|k| k.ends_with("0002.png")), "{:?}", tree(&out));
 
     // The jobs in another valid order: the layers backwards, each file's composite right after
     // its last layer, one layer run twice (the second run finds it done).

@@ -204,6 +204,7 @@ pub fn render_layer(
     output::prepare_dir(&paint_dir)?;
     output::remove_stale_temporaries(&paint_dir, None);
     output::remove_stale_temporaries(&dir, None);
+    output::remove_stale_temporaries(&state_dir, None);
     std::fs::create_dir_all(&state_dir).map_err(|e| Error::io(&state_dir, e))?;
     if done == 0 {
         write_progress(&state_dir, state_fingerprint, 0)?;
