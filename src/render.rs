@@ -26,7 +26,7 @@
 //! [`render_batch`] renders many files, several at once, sharing the prepared exemplars; a
 //! file that fails does not stop the others. The same render can also be cut into
 //! independent jobs — one per stylized layer ([`render_layer`]: the layer's frames painted
-//! in the exemplar's colors, with its own checkpoints) and one per file ([`composite`]:
+//! in the exemplar's colors, with its own checkpoints) and one per file ([`composite()`]:
 //! recoloring and compositing the painted layers into frames and a GIF) — which a job
 //! scheduler can run on many machines. All three give the same bytes: the painted layer
 //! passes through the same 16-bit quantization ([`paint`]) whether it stays in memory or is

@@ -120,8 +120,14 @@ pub struct Styles {
     path: PathBuf,
     default: Option<String>,
     layers: Vec<(String, String)>,
-    /// `[files."KEY"]`: the key, its default and its layers.
-    files: Vec<(String, Option<String>, Vec<(String, String)>)>,
+    files: Vec<FileStyles>,
+}
+
+/// A styles file's `[files."KEY"]` table.
+struct FileStyles {
+    key: String,
+    default: Option<String>,
+    layers: Vec<(String, String)>,
 }
 
 fn layer_table(path: &Path, table: toml::Table, within: &str) -> Result<Vec<(String, String)>> {
@@ -152,7 +158,8 @@ impl Styles {
         let mut files = Vec::new();
         for (key, entry) in file.files {
             let within = format!(" in [files.\"{key}\".layers]");
-            files.push((key, entry.default, layer_table(path, entry.layers, &within)?));
+            let layers = layer_table(path, entry.layers, &within)?;
+            files.push(FileStyles { key, default: entry.default, layers });
         }
         Ok(Styles { path: path.to_path_buf(), default: file.default, layers, files })
     }
@@ -168,8 +175,8 @@ impl Styles {
     }
 
     /// The `[files]` entry of `input`, if any.
-    fn file(&self, input: &Path) -> Option<&(String, Option<String>, Vec<(String, String)>)> {
-        self.files.iter().find(|(k, _, _)| self.matches(k, input))
+    fn file(&self, input: &Path) -> Option<&FileStyles> {
+        self.files.iter().find(|f| self.matches(&f.key, input))
     }
 }
 
@@ -295,23 +302,20 @@ pub fn file_options(
     if let Some(s) = styles {
         opts.default_style = s.default.clone();
         opts.styles.extend(s.layers.iter().filter(|(layer, _)| anim.find_region(layer).is_ok()).cloned());
-        if let Some((key, default, layers)) = s.file(input) {
-            if default.is_some() {
-                opts.default_style = default.clone();
+        if let Some(file) = s.file(input) {
+            if file.default.is_some() {
+                opts.default_style = file.default.clone();
             }
-            for (layer, ex) in layers {
+            for (layer, ex) in &file.layers {
                 anim.find_region(layer).with_context(|| {
-                    format!("in the styles file '{}', [files.\"{}\".layers]", s.path.display(), key)
+                    format!("in the styles file '{}', [files.\"{}\".layers]", s.path.display(), file.key)
                 })?;
                 opts.styles.push((layer.clone(), ex.clone()));
             }
         }
     }
     if let Some(e) = &args.exemplar {
-        let file_default = styles.and_then(|s| s.file(input)).and_then(|(_, d, _)| d.as_ref());
-        if file_default.is_none() {
-            opts.default_style = Some(e.clone());
-        }
+        opts.default_style = Some(e.clone());
     }
     for (layer, ex) in style_flags(args)? {
         if anim.find_region(&layer).is_ok() {

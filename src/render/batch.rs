@@ -15,6 +15,9 @@ use std::sync::{Arc, Mutex};
 /// need the same one wait for it instead of computing it again.
 type Slot<T> = Arc<Mutex<Option<T>>>;
 
+/// A prepared source is found by its exemplar (name and search folders) and parameters.
+type SourceKey = (String, Params);
+
 /// Exemplars and their prepared sources (guides and pyramid), shared by the files of a batch:
 /// each is loaded or prepared once.
 ///
@@ -23,7 +26,7 @@ type Slot<T> = Arc<Mutex<Option<T>>>;
 #[derive(Default)]
 pub struct StyleCache {
     exemplars: Mutex<Vec<(String, Slot<Exemplar>)>>,
-    sources: Mutex<Vec<((String, Params), Slot<Source>)>>,
+    sources: Mutex<Vec<(SourceKey, Slot<Source>)>>,
 }
 
 fn slot<K: PartialEq, T>(list: &Mutex<Vec<(K, Slot<T>)>>, key: K) -> Slot<T> {

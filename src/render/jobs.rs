@@ -129,9 +129,11 @@ fn lock(dir: &Path) -> Result<std::fs::File> {
 }
 
 /// Paints region `region` of `anim` (its position in [`Animation::regions`]) as `opts` says,
-/// into `opts.out_dir/layers/NN_name/` (see the [module documentation](self)). A complete job
-/// with the same options is not done again; an interrupted one continues from its last
-/// checkpoint; one made with other options is started over.
+/// into `opts.out_dir/layers/NN_name/`: `paint/NNNN.png` ([`Paint`]), checkpoints in
+/// `.fluidymation/` while it runs, [`LAYER_MANIFEST`] when complete, and a `.lock` held while
+/// it runs (a second run of the same job waits for the first). A complete job with the same
+/// options is not done again; an interrupted one continues from its last checkpoint; one made
+/// with other options is started over.
 ///
 /// Only the options that decide the painting are used: input, frames, scale, styles, strokes,
 /// exemplar folders and engine parameters ([`RenderOptions::gif`], `background`, `recolor`

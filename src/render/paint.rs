@@ -3,7 +3,7 @@
 //!
 //! This is what a [`render_layer`](super::render_layer) job writes to
 //! `layers/NN_name/paint/NNNN.png` (16-bit RGBA PNG, alpha = the synthesized mask, color 0
-//! outside it) and what [`composite`](super::composite) reads back. [`render`](super::render)
+//! outside it) and what [`composite`](super::composite()) reads back. [`render`](super::render)
 //! keeps it in memory but passes it through the same quantization, so the three ways of
 //! rendering recolor exactly the same numbers and write the same bytes. 16 bits keep the
 //! quantization far below what an 8-bit frame can show (steps of 1/65535 against 1/255).
