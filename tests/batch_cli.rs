@@ -5,48 +5,12 @@
 //! Inputs are small (`--scale 0.25`–`0.5`, a few frames): the bundled demo
 //! `fixtures/demo/waving.json` and `tests/render/quads.json`.
 
-use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+mod farm_support;
+
+use farm_support::*;
+use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_fluidymation"))
-}
-
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn demo() -> PathBuf {
-    root().join("fixtures/demo/waving.json")
-}
-
-fn quads() -> PathBuf {
-    root().join("tests/render/quads.json")
-}
-
-/// A scratch directory removed at the end of the test (also when it fails).
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Scratch {
-        let dir = std::env::temp_dir().join(format!("fm-batch-{}-{}", name, std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-
-    fn join(&self, p: &str) -> PathBuf {
-        self.0.join(p)
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
 
 fn run(args: &[&std::ffi::OsStr]) -> Output {
     bin().args(args).output().unwrap()
@@ -65,47 +29,8 @@ fn assert_success(o: &Output) {
     assert!(o.status.success(), "exit {:?}\n{}", o.status.code(), stderr(o));
 }
 
-/// Every file below `dir` (relative paths, hidden ones included), sorted.
-fn tree(dir: &Path) -> Vec<String> {
-    fn walk(base: &Path, dir: &Path, out: &mut Vec<String>) {
-        for e in std::fs::read_dir(dir).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                walk(base, &p, out);
-            } else {
-                out.push(p.strip_prefix(base).unwrap().to_string_lossy().into_owned());
-            }
-        }
-    }
-    let mut out = Vec::new();
-    walk(dir, dir, &mut out);
-    out.sort();
-    out
-}
-
-/// The bytes of every result file below `dir`: frames, GIFs and kept layers (not the
-/// painted intermediates, the checkpoints or the manifests of a plan's jobs).
-fn results(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    tree(dir)
-        .into_iter()
-        .filter(|n| {
-            (n.ends_with(".png") || n.ends_with(".gif")) && !n.contains("/paint/") && !n.contains(".fluidymation")
-        })
-        .map(|n| (n.clone(), std::fs::read(dir.join(&n)).unwrap()))
-        .collect()
-}
-
 fn frame_names(range: std::ops::RangeInclusive<usize>) -> Vec<String> {
     range.map(|k| format!("{k:04}.png")).collect()
-}
-
-#[track_caller]
-fn assert_same_results(a: &Path, b: &Path) {
-    let (x, y) = (results(a), results(b));
-    assert_eq!(x.keys().collect::<Vec<_>>(), y.keys().collect::<Vec<_>>(), "different files");
-    for (name, bytes) in &x {
-        assert!(*bytes == y[name], "{name} differs between {} and {}", a.display(), b.display());
-    }
 }
 
 fn rgba(path: &Path) -> image::RgbaImage {

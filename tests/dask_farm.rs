@@ -6,21 +6,15 @@
 //! variable `FLUIDYMATION_DASK_VENV` (`.ci/run` creates one and sets it). Without it the
 //! tests say so and pass — except under CI (`CI` set), where they fail.
 
-use std::collections::BTreeMap;
+mod farm_support;
+
+use farm_support::*;
 use std::net::{TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 const VENV_VAR: &str = "FLUIDYMATION_DASK_VENV";
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_fluidymation"))
-}
-
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
 
 /// The virtual environment's `bin/`, or `None` (with a message) when the tests cannot run
 /// here.
@@ -42,28 +36,6 @@ fn venv() -> Option<PathBuf> {
             );
             None
         }
-    }
-}
-
-/// A scratch directory removed at the end of the test.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Scratch {
-        let dir = std::env::temp_dir().join(format!("fm-dask-{}-{}", name, std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-
-    fn join(&self, p: &str) -> PathBuf {
-        self.0.join(p)
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
     }
 }
 
@@ -187,41 +159,11 @@ fn render(inputs: &[&Path], out: &Path, opts: &[&str]) {
     assert!(o.status.success(), "render: {}", String::from_utf8_lossy(&o.stderr));
 }
 
-/// The bytes of the frames, GIFs and kept layers below `dir`.
-fn results(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    fn walk(base: &Path, dir: &Path, out: &mut BTreeMap<String, Vec<u8>>) {
-        for e in std::fs::read_dir(dir).unwrap() {
-            let p = e.unwrap().path();
-            let name = p.strip_prefix(base).unwrap().to_string_lossy().into_owned();
-            if p.is_dir() {
-                if !name.ends_with("paint") && !name.ends_with(".fluidymation") {
-                    walk(base, &p, out);
-                }
-            } else if name.ends_with(".png") || name.ends_with(".gif") {
-                out.insert(name, std::fs::read(&p).unwrap());
-            }
-        }
-    }
-    let mut out = BTreeMap::new();
-    walk(dir, dir, &mut out);
-    out
-}
-
-#[track_caller]
-fn assert_same_results(a: &Path, b: &Path) {
-    let (x, y) = (results(a), results(b));
-    assert!(!x.is_empty());
-    assert_eq!(x.keys().collect::<Vec<_>>(), y.keys().collect::<Vec<_>>(), "different files");
-    for (name, bytes) in &x {
-        assert!(*bytes == y[name], "{name} differs between {} and {}", a.display(), b.display());
-    }
-}
-
 #[test]
 fn a_plan_of_two_files_on_dask_gives_the_bytes_of_render() {
     let Some(venv) = venv() else { return };
     let tmp = Scratch::new("two-files");
-    let (quads, demo) = (root().join("tests/render/quads.json"), root().join("fixtures/demo/waving.json"));
+    let (quads, demo) = (quads(), demo());
     let opts =
         ["--scale", "0.25", "--frames", "1..4", "--seed", "9", "--keep-layers", "--style", "arm=ink-rims", "--gif"];
     let rendered = tmp.join("render");
@@ -285,7 +227,7 @@ fn alive(pid: u32) -> bool {
 fn a_worker_killed_in_the_middle_of_a_layer_job_is_retried_to_the_same_bytes() {
     let Some(venv) = venv() else { return };
     let tmp = Scratch::new("kill");
-    let demo = root().join("fixtures/demo/waving.json");
+    let demo = demo();
     // One stylized layer: one layer job, then the composite.
     let opts = ["--scale", "0.5", "--frames", "1..16", "--exemplar", "none", "--style", "dress=blue-bloom", "--gif"];
     let rendered = tmp.join("render");

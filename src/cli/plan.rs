@@ -4,7 +4,7 @@
 //! hand or by `scripts/fluidymation_dask.py`, the jobs give the same bytes as `render`.
 
 use super::Ctx;
-use super::render::{RenderArgs, check_args, check_layer_keys, file_options, input_stem, load_input, output_layout};
+use super::render::{RenderArgs, Targets, check_args, check_layer_keys, file_options, input_stem, load_input};
 use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
 use fluidymation::anim::Animation;
@@ -26,16 +26,8 @@ const COMPOSITE_COST_DIVISOR: u64 = 25;
 #[derive(clap::Args, Debug)]
 #[command(mut_arg("target_scale", |a| a.hide(true)))]
 pub struct Args {
-    /// The inputs, as for `render`.
-    #[arg(required = true, value_name = "INPUT")]
-    pub inputs: Vec<PathBuf>,
-    /// The output directory, as for `render` (each job writes below it; on a farm it must be
-    /// on a file system every machine shares).
-    #[arg(long, short = 'o', value_name = "OUT_DIR")]
-    pub output: PathBuf,
-    /// Also write animated GIFs, as for `render`.
-    #[arg(long, value_name = "FILE")]
-    pub gif: Option<Option<PathBuf>>,
+    #[command(flatten)]
+    pub targets: Targets,
     #[command(flatten)]
     pub render: RenderArgs,
 }
@@ -134,11 +126,12 @@ fn job_style(style: &str, dirs: &[PathBuf], known: &mut HashMap<String, String>)
 /// Runs `plan`.
 pub fn run(args: Args, _ctx: &Ctx) -> Result<()> {
     let styles = check_args(&args.render)?;
-    let layout = output_layout(&args.inputs, &args.output, args.gif.as_ref().map(|g| g.as_deref()))?;
+    let layout = args.targets.layout()?;
     let program = std::env::current_exe().context("could not find this program's path")?;
     let program = text(&absolute(&program)?);
-    let out = absolute(&args.output)?;
-    let anims: Vec<Animation> = args.inputs.iter().map(|i| load_input(i, &args.render)).collect::<Result<_>>()?;
+    let out = absolute(&args.targets.output)?;
+    let anims: Vec<Animation> =
+        args.targets.inputs.iter().map(|i| load_input(i, &args.render)).collect::<Result<_>>()?;
     check_layer_keys(&args.render, styles.as_ref(), &anims.iter().collect::<Vec<_>>())?;
     let mut known = HashMap::new();
     let dirs: Vec<PathBuf> = args.render.exemplar_dir.iter().map(|d| absolute(d)).collect::<Result<_>>()?;
@@ -151,7 +144,7 @@ pub fn run(args: Args, _ctx: &Ctx) -> Result<()> {
         files: Vec::new(),
         jobs: Vec::new(),
     };
-    for ((anim, input), (out_dir, gif)) in anims.iter().zip(&args.inputs).zip(layout) {
+    for ((anim, input), (out_dir, gif)) in anims.iter().zip(&args.targets.inputs).zip(layout) {
         let out_dir = absolute(&out_dir)?;
         let gif = gif.as_deref().map(absolute).transpose()?;
         let opts = file_options(anim, input, out_dir.clone(), gif.clone(), &args.render, styles.as_ref())

@@ -60,23 +60,38 @@ pub struct RenderArgs {
     pub flags: SynthFlags,
 }
 
-/// Arguments of `render`.
+/// The inputs and where they go, as `render` and `plan` take them.
 #[derive(clap::Args, Debug)]
-// `--target-scale` is `synth`'s; `render` has `--scale`.
-#[command(mut_arg("target_scale", |a| a.hide(true)))]
-pub struct Args {
+pub struct Targets {
     /// Lottie .json files, directories or quoted globs of SVG frames, or directories of PNG
     /// masks. With several, each is written to OUT_DIR/<name>/.
     #[arg(required = true, value_name = "INPUT")]
     pub inputs: Vec<PathBuf>,
     /// Output directory for the frames (NNNN.png, 0001 = the first frame); with several
-    /// inputs, the folder of one sub-folder per input.
+    /// inputs, the folder of one sub-folder per input. On a render farm, a folder every
+    /// machine shares.
     #[arg(long, short = 'o', value_name = "OUT_DIR")]
     pub output: PathBuf,
     /// Also write an animated GIF: to FILE (one input only), or without a value to
     /// OUT_DIR/<name>.gif for every input.
     #[arg(long, value_name = "FILE")]
     pub gif: Option<Option<PathBuf>>,
+}
+
+impl Targets {
+    /// Where each input goes (see [`output_layout`]).
+    pub fn layout(&self) -> Result<Vec<(PathBuf, Option<PathBuf>)>> {
+        output_layout(&self.inputs, &self.output, self.gif.as_ref().map(|g| g.as_deref()))
+    }
+}
+
+/// Arguments of `render`.
+#[derive(clap::Args, Debug)]
+// `--target-scale` is `synth`'s; `render` has `--scale`.
+#[command(mut_arg("target_scale", |a| a.hide(true)))]
+pub struct Args {
+    #[command(flatten)]
+    pub targets: Targets,
     /// Worker threads [default: all cores]. The output does not depend on it.
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
@@ -486,12 +501,12 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     if args.parallel_files == 0 {
         bail!("--parallel-files 0: expected at least 1");
     }
-    check_svg_frames(&args.inputs)?;
-    let layout = output_layout(&args.inputs, &args.output, args.gif.as_ref().map(|g| g.as_deref()))?;
+    check_svg_frames(&args.targets.inputs)?;
+    let layout = args.targets.layout()?;
     handle_interrupts();
-    if args.inputs.len() == 1 {
+    if args.targets.inputs.len() == 1 {
         let (out_dir, gif) = layout.into_iter().next().expect("one input");
-        return run_one(&args, ctx, &args.inputs[0], out_dir, gif, styles.as_ref());
+        return run_one(&args, ctx, &args.targets.inputs[0], out_dir, gif, styles.as_ref());
     }
     run_batch(&args, ctx, layout, styles.as_ref())
 }
@@ -517,7 +532,7 @@ fn run_one(
         Err(Error::Cancelled) => {
             bail!(anyhow::Error::new(Error::Cancelled).context(format!(
                 "interrupted; the finished frames are in '{}' — continue with the same command and --resume",
-                args.output.display()
+                args.targets.output.display()
             )))
         }
         Err(e) => return Err(anyhow::Error::new(e).context(format!("could not render '{}'", input.display()))),
@@ -572,12 +587,12 @@ fn print_eval(summary: &RenderSummary, file: Option<&Path>) {
 fn run_batch(args: &Args, ctx: &Ctx, layout: Vec<(PathBuf, Option<PathBuf>)>, styles: Option<&Styles>) -> Result<()> {
     let start = std::time::Instant::now();
     // Load every input; one that fails is reported at the end, the others are rendered.
-    let loaded: Vec<Result<Animation>> = args.inputs.iter().map(|i| load_input(i, &args.render)).collect();
+    let loaded: Vec<Result<Animation>> = args.targets.inputs.iter().map(|i| load_input(i, &args.render)).collect();
     let anims: Vec<&Animation> = loaded.iter().filter_map(|a| a.as_ref().ok()).collect();
     check_layer_keys(&args.render, styles, &anims)?;
     let mut options: Vec<Result<RenderOptions>> = loaded
         .iter()
-        .zip(&args.inputs)
+        .zip(&args.targets.inputs)
         .zip(layout)
         .map(|((anim, input), (out_dir, gif))| {
             let anim = anim.as_ref().map_err(|e| anyhow::anyhow!("{e:#}"))?;
@@ -597,15 +612,16 @@ fn run_batch(args: &Args, ctx: &Ctx, layout: Vec<(PathBuf, Option<PathBuf>)>, st
             bail!(
                 "'{}': there is no interrupted render to resume here (none of the {} inputs has one); render \
                  without --resume",
-                args.output.display(),
-                args.inputs.len()
+                args.targets.output.display(),
+                args.targets.inputs.len()
             );
         }
     }
 
     let bars = Bars::new(ctx.quiet);
-    let counts = Mutex::new(vec![(0, 0); args.inputs.len()]);
+    let counts = Mutex::new(vec![(0, 0); args.targets.inputs.len()]);
     let progress: Vec<FileProgress> = args
+        .targets
         .inputs
         .iter()
         .enumerate()
@@ -641,16 +657,17 @@ fn run_batch(args: &Args, ctx: &Ctx, layout: Vec<(PathBuf, Option<PathBuf>)>, st
     let cancelled = results
         .iter()
         .any(|r| r.as_ref().err().is_some_and(|e| matches!(e.downcast_ref::<Error>(), Some(Error::Cancelled))));
-    let failed: Vec<&PathBuf> = args.inputs.iter().zip(&results).filter(|(_, r)| r.is_err()).map(|(i, _)| i).collect();
+    let failed: Vec<&PathBuf> =
+        args.targets.inputs.iter().zip(&results).filter(|(_, r)| r.is_err()).map(|(i, _)| i).collect();
     if !ctx.quiet || !failed.is_empty() {
         eprintln!(
             "{} files in {:.1} s: {} rendered, {} failed",
-            args.inputs.len(),
+            args.targets.inputs.len(),
             start.elapsed().as_secs_f64(),
-            args.inputs.len() - failed.len(),
+            args.targets.inputs.len() - failed.len(),
             failed.len()
         );
-        for (input, r) in args.inputs.iter().zip(&results) {
+        for (input, r) in args.targets.inputs.iter().zip(&results) {
             match r {
                 Ok(s) if !ctx.quiet => eprintln!("  ok      {}: {}", input.display(), summary_line(s)),
                 Ok(_) => {}
@@ -658,7 +675,7 @@ fn run_batch(args: &Args, ctx: &Ctx, layout: Vec<(PathBuf, Option<PathBuf>)>, st
             }
         }
     }
-    for (input, r) in args.inputs.iter().zip(&results) {
+    for (input, r) in args.targets.inputs.iter().zip(&results) {
         if let Ok(s) = r {
             print_eval(s, Some(input));
         }
@@ -666,12 +683,12 @@ fn run_batch(args: &Args, ctx: &Ctx, layout: Vec<(PathBuf, Option<PathBuf>)>, st
     if cancelled {
         bail!(anyhow::Error::new(Error::Cancelled).context(format!(
             "interrupted; the finished frames are in '{}' — continue with the same command and --resume",
-            args.output.display()
+            args.targets.output.display()
         )));
     }
     if !failed.is_empty() {
         let names: Vec<String> = failed.iter().map(|p| format!("'{}'", p.display())).collect();
-        bail!("{} of {} files failed: {}", failed.len(), args.inputs.len(), names.join(", "));
+        bail!("{} of {} files failed: {}", failed.len(), args.targets.inputs.len(), names.join(", "));
     }
     Ok(())
 }
