@@ -368,6 +368,16 @@ fn plan_jobs_run_by_hand_give_the_bytes_of_render() {
     assert_success(&again);
     assert!(stderr(&again).contains("already complete"), "{}", stderr(&again));
     assert_same_results(&out, &rendered);
+
+    // A composite with other engine options than its layers were painted with is refused,
+    // and the frames stay as they are.
+    let mut other = composites[0].argv.clone();
+    let seed = other.iter().position(|a| a == "--seed").unwrap();
+    other[seed + 1] = "4".into();
+    let o = Command::new(&other[0]).args(&other[1..]).output().unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("painted with other options"), "{}", stderr(&o));
+    assert_same_results(&out, &rendered);
 }
 
 #[cfg(unix)]
