@@ -38,6 +38,7 @@
 
 mod contrast;
 mod coverage;
+mod farneback;
 mod flow;
 mod palette;
 mod patches;
@@ -51,6 +52,7 @@ pub use coverage::{
     OPAQUE_ALPHA, Painted, coverage_iou, detect_painted, estimate_background, has_alpha, intersection_union, iou,
     painted_mask,
 };
+pub use farneback::{FarnebackParams, MIN_LEVEL_SIDE, REGULARIZATION, farneback_flow, warp_bilinear};
 pub use flow::{
     BlockMatchParams, MotionParams, block_matching_flow, match_block, motion_agreement, target_motion,
     target_motion_field,
