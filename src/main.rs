@@ -40,7 +40,8 @@ enum Command {
     /// Run the synthesis engine on a plain mask sequence (output in the exemplar's colors).
     Synth(cli::synth::Args),
     /// Measure a stylized sequence against its exemplar and target masks (coverage, texture,
-    /// palette, temporal change, motion); print a table or JSON, optionally draw a chart.
+    /// edge darkening, palette, temporal and incoherent change, motion); print a table or JSON,
+    /// optionally draw a chart.
     Eval(cli::eval::Args),
     /// Manage style exemplars: list, show, generate and import.
     Exemplar(cli::exemplar::Args),

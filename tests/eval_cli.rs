@@ -75,6 +75,7 @@ fn prints_a_table_json_and_a_chart() {
     assert!(out.contains("exemplar 'cli-bloom'"), "{out}");
     assert!(out.contains("coverage IoU") && out.contains("1.0000"), "{out}");
     assert!(out.contains("temporal change (stationary interior)"), "{out}");
+    assert!(out.contains("edge darkening") && out.contains("incoherent change"), "{out}");
     let table = out.split_once("frame      IoU").expect("per-frame table").1;
     assert_eq!(table.lines().filter(|l| l.trim_start().starts_with(|c: char| c.is_ascii_digit())).count(), FRAMES);
 
@@ -87,6 +88,17 @@ fn prints_a_table_json_and_a_chart() {
     assert_eq!(v["summary"]["coverage_iou"], 1.0);
     assert!((v["summary"]["contrast_ratio"].as_f64().unwrap() - 1.0).abs() < 0.01, "{}", v["summary"]);
     assert!(v["summary"]["palette_distance_mean"].as_f64().unwrap() < 0.005);
+    for ratio in ["edge_darkening_ratio", "incoherent_change_ratio"] {
+        assert!((v["summary"][ratio].as_f64().unwrap() - 1.0).abs() < 0.05, "{ratio}: {}", v["summary"]);
+    }
+    assert!(v["per_frame"][1]["incoherent_change"].is_number());
+    // The rim's distances are flags.
+    let o2 = s.run(&["--json", "--rim-band", "3", "--rim-interior", "9"]);
+    let (out2, err2) = text(&o2);
+    assert!(o2.status.success(), "{err2}");
+    let narrow: serde_json::Value = serde_json::from_str(&out2).unwrap();
+    assert_eq!(narrow["options"]["rim"]["band"], 3.0);
+    assert_ne!(narrow["summary"]["edge_darkening"], v["summary"]["edge_darkening"]);
     assert_eq!(v["per_frame"].as_array().unwrap().len(), FRAMES);
     assert!(v["per_frame"][0]["temporal_change"].is_null());
     assert_eq!(v["painted"], "alpha");
@@ -127,6 +139,10 @@ fn clear_errors_and_exit_code_1() {
     // A bad option.
     fails_with(&s.run(&["--background", "blue"]), &["--background 'blue' is not a #rrggbb color"]);
     fails_with(&s.run(&["--interior-margin=-1"]), &["--interior-margin"]);
+    fails_with(
+        &s.run(&["--rim-band", "5", "--rim-interior", "4"]),
+        &["--rim-interior", "a distance >= the band (5 px)"],
+    );
     // A mask of another size, named.
     img::save_gray(&s.path("masks/0003.png"), &fluidymation::img::Plane::filled(60, SIZE, 1.0)).unwrap();
     fails_with(&s.run(&[]), &["0003.png", "is 60x64", "0001.png", "is 64x64"]);

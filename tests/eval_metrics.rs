@@ -38,6 +38,9 @@ fn exemplar_against_itself_scores_identity() {
     assert_eq!(s.coverage_iou, Some(1.0));
     assert!(close(s.contrast_ratio.unwrap(), 1.0, 1e-6), "{:?}", s.contrast_ratio);
     assert!(close(s.temporal_change_ratio.unwrap(), 1.0, 1e-6), "{:?}", s.temporal_change_ratio);
+    assert_eq!(s.edge_darkening_ratio, Some(1.0));
+    assert_eq!(s.incoherent_change_ratio, Some(1.0));
+    assert_eq!(s.edge_darkening, r.exemplar.edge_darkening);
     assert_eq!(s.palette_distance, Some([0.0; 3]));
     assert_eq!(s.motion_agreement, r.exemplar.motion_agreement);
     // The bloom's paint flows outward with its growing mask.
@@ -71,6 +74,18 @@ fn flat_fill_has_no_contrast_no_change_and_the_wrong_palette() {
     assert!(s.contrast_ratio.unwrap() < 1e-4, "{:?}", s.contrast_ratio);
     assert!(s.temporal_change_ratio.unwrap() < 1e-4, "{:?}", s.temporal_change_ratio);
     assert_eq!(s.coverage_iou, Some(1.0));
+    // Nothing changes. No dark rim: only the anti-aliased edge, half paper, is paler.
+    assert!(s.incoherent_change.unwrap() < 1e-6, "{:?}", s.incoherent_change);
+    assert!(s.edge_darkening.unwrap() <= 0.0 && s.edge_darkening.unwrap() > -0.03, "{:?}", s.edge_darkening);
+    assert_eq!(s.rim_frames, FRAMES as u64 - 1, "the first frame's bloom is too small for an interior");
+    // With a hard-edged alpha (as `synth` writes) the band is exactly the interior's color.
+    let hard: Vec<_> = masks
+        .iter()
+        .map(|m| with_alpha(&Plane::filled(SIZE, SIZE, flat_color), &m.threshold(0.5).to_coverage()))
+        .collect();
+    let r = eval::evaluate(&hard, &ex, &masks, &EvalOptions::default()).unwrap();
+    assert_eq!(r.summary.edge_darkening, Some(0.0));
+    assert_eq!(r.summary.edge_darkening_ratio, Some(0.0));
     // One color against a spread of colors: the palette distance is the spread's mean
     // deviation, clearly above 0 in the channel the pigment absorbs most.
     assert!(s.palette_distance.unwrap()[0] > 0.02, "{:?}", s.palette_distance);
@@ -91,8 +106,11 @@ fn shuffled_frames_flicker_and_frozen_frames_are_glued() {
     let opts = EvalOptions { patches: eval::PatchParams { samples: 256, ..Default::default() }, ..Default::default() };
     let r = eval::evaluate(&shuffled, &ex, &masks, &opts).unwrap();
     let ratio = r.summary.temporal_change_ratio.unwrap();
-    println!("shuffled: temporal change ratio {ratio}");
+    let incoherent = r.summary.incoherent_change_ratio.unwrap();
+    println!("shuffled: temporal change ratio {ratio}, incoherent change ratio {incoherent}");
     assert!(ratio > 3.0, "{ratio}");
+    // Flow cannot explain unrelated paint: several times the exemplar's own change.
+    assert!(incoherent > 3.0, "{incoherent}");
     // Texture and colors are still the exemplar's: contrast ratio ≈ 1, small palette distance.
     assert!(close(r.summary.contrast_ratio.unwrap(), 1.0, 0.15), "{:?}", r.summary.contrast_ratio);
     assert!(r.summary.palette_distance_mean.unwrap() < 0.02);
@@ -348,7 +366,11 @@ fn plot_draws_every_series() {
     let img = eval::plot::render_plot(&r, &opts).unwrap();
     assert_eq!(img.width(), 960);
     let svg = eval::plot::plot_svg(&r, &opts);
-    assert_eq!(svg.matches("<polyline").count(), 8, "IoU, contrast, 3 palette channels, patches, temporal, motion");
+    assert_eq!(
+        svg.matches("<polyline").count(),
+        10,
+        "IoU, contrast, rim, 3 palette channels, patches, temporal, incoherent, motion"
+    );
     // Pixels of the coverage line's color (#1f77b4) are drawn.
     let blue = img
         .data()
@@ -356,4 +378,178 @@ fn plot_draws_every_series() {
         .filter(|c| close(c[0], 0x1f as f32 / 255.0, 0.02) && close(c[2], 0xb4 as f32 / 255.0, 0.02))
         .count();
     assert!(blue > 100, "{blue}");
+}
+
+/// The texture of the eval tests as luma, moved by `shift` and turned by `angle` about
+/// (48, 48): `moved(p) = still(R⁻¹(p − c − shift) + c)`, so content at `q` moves to
+/// `R(q − c) + c + shift`.
+fn moved_texture(shift: Vec2, angle: f32) -> Plane<f32> {
+    let c = Vec2::splat(48.0);
+    let back = Vec2::from_angle(-angle);
+    Plane::from_fn(96, 96, |x, y| {
+        let q = back.rotate(Vec2::new(x as f32, y as f32) - c - shift) + c;
+        texture(q.x, q.y, 5)
+    })
+}
+
+/// Mean and largest end-point error of `flow` against `expected` over x, y in 16..80.
+fn flow_error(flow: &Plane<Vec2>, expected: impl Fn(Vec2) -> Vec2) -> (f32, f32) {
+    let (mut sum, mut max, mut n) = (0f32, 0f32, 0);
+    for y in 16..80 {
+        for x in 16..80 {
+            let e = (flow.get(x, y) - expected(Vec2::new(x as f32, y as f32))).length();
+            sum += e;
+            max = max.max(e);
+            n += 1;
+        }
+    }
+    (sum / n as f32, max)
+}
+
+#[test]
+fn farneback_recovers_subpixel_translation_and_rotation() {
+    let p = eval::FarnebackParams::default();
+    let still = moved_texture(Vec2::ZERO, 0.0);
+    for shift in [Vec2::new(1.3, -0.7), Vec2::new(-0.4, 2.6), Vec2::new(5.5, 3.0)] {
+        let flow = eval::farneback_flow(&still, &moved_texture(shift, 0.0), &p);
+        let (mean, max) = flow_error(&flow, |_| shift);
+        println!("translation {shift}: mean error {mean:.3} px, max {max:.3}");
+        assert!(mean < 0.1 && max < 0.3, "{shift}: mean {mean} max {max}");
+    }
+    // 2° about the center: up to 1.1 px of motion at the corners of the measured square.
+    let angle = 2f32.to_radians();
+    let flow = eval::farneback_flow(&still, &moved_texture(Vec2::ZERO, angle), &p);
+    let c = Vec2::splat(48.0);
+    let (mean, max) = flow_error(&flow, |q| Vec2::from_angle(angle).rotate(q - c) + c - q);
+    println!("rotation 2°: mean error {mean:.3} px, max {max:.3}");
+    assert!(mean < 0.1 && max < 0.3, "rotation: mean {mean} max {max}");
+    // Deterministic whatever the thread count.
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let again = one.install(|| eval::farneback_flow(&still, &moved_texture(Vec2::ZERO, angle), &p));
+    assert_eq!(again, flow);
+}
+
+#[test]
+fn flow_residual_is_zero_for_moving_paint_and_large_for_new_paint() {
+    let p = eval::FarnebackParams::default();
+    let region = Plane::from_fn(96, 96, |x, y| (16..80).contains(&x) && (16..80).contains(&y));
+    let still = moved_texture(Vec2::ZERO, 0.0);
+    let mean_diff = |a: &Plane<f32>, b: &Plane<f32>| {
+        let inside = region.data().iter().zip(a.data().iter().zip(b.data())).filter(|(m, _)| **m);
+        inside.map(|(_, (a, b))| (a - b).abs()).sum::<f32>() / region.count() as f32
+    };
+    // Whole pixels: the flow carries the texture exactly. Sub-pixel: bilinear resampling of this
+    // fine texture (cells of 2.5 px) leaves a little.
+    for (shift, most) in [(Vec2::new(2.0, -1.0), 0.01), (Vec2::new(1.7, -1.2), 0.1)] {
+        let moved = moved_texture(shift, 0.0);
+        let plain = mean_diff(&still, &moved);
+        let residual = eval::flow_residual(&still, &moved, &region, &p).unwrap();
+        println!("texture moved by {shift}: residual {residual:.5} against a plain difference of {plain:.4}");
+        assert!(residual < most * plain, "{shift}: {residual} vs {plain}");
+    }
+    // Unrelated paint: the flow cannot explain it.
+    let other = Plane::from_fn(96, 96, |x, y| texture(x as f32, y as f32, 99));
+    let unrelated = eval::flow_residual(&still, &other, &region, &p).unwrap();
+    println!("unrelated texture: residual {unrelated:.4} against {:.4}", mean_diff(&still, &other));
+    assert!(unrelated > 0.5 * mean_diff(&still, &other), "{unrelated}");
+    assert_eq!(eval::flow_residual(&still, &still, &Plane::filled(96, 96, false), &p), None);
+}
+
+#[test]
+fn shuffled_exemplar_frames_are_incoherent() {
+    // The exemplar's own frames in order and shuffled, each with its own mask.
+    let b = bloom();
+    let perm = [7, 2, 10, 0, 5, 11, 3, 8, 1, 9, 4, 6];
+    let luma = |t: usize| eval::luma_plane(&b.frame(t));
+    let shape = |t: usize| Shape::from_coverage(&b.mask(t));
+    let params = eval::CoherenceParams::default();
+    let ordered = eval::incoherent_change(
+        &(0..FRAMES).map(luma).collect::<Vec<_>>(),
+        &(0..FRAMES).map(shape).collect::<Vec<_>>(),
+        &params,
+    );
+    let shuffled = eval::incoherent_change(
+        &perm.iter().map(|&t| luma(t)).collect::<Vec<_>>(),
+        &perm.iter().map(|&t| shape(t)).collect::<Vec<_>>(),
+        &params,
+    );
+    let (o, s) = (ordered.value.unwrap(), shuffled.value.unwrap());
+    println!("test bloom: incoherent change ordered {o:.5}, shuffled {s:.5} ({:.1}x)", s / o);
+    assert!(s > 3.0 * o, "{s} vs {o}");
+    assert_eq!(ordered.per_frame[0], None);
+    assert!(ordered.per_frame[1..].iter().all(Option::is_some));
+
+    // A real exemplar (bundled, 30 frames of 200x200): its frames shuffled.
+    let ex = fluidymation::exemplar::find("blue-bloom", &fluidymation::exemplar::SearchPath::standard(&[])).unwrap();
+    let n = ex.len();
+    let order: Vec<usize> = (0..n).map(|i| (i * 7 + 3) % n).collect();
+    let lumas: Vec<_> = ex.frames.iter().map(eval::luma_plane).collect();
+    let shapes: Vec<_> = ex.masks.iter().map(Shape::from_coverage).collect();
+    let o = eval::incoherent_change(&lumas, &shapes, &params).value.unwrap();
+    fn pick<T: Clone>(v: &[T], order: &[usize]) -> Vec<T> {
+        order.iter().map(|&i| v[i].clone()).collect()
+    }
+    let s = eval::incoherent_change(&pick(&lumas, &order), &pick(&shapes, &order), &params).value.unwrap();
+    println!("blue-bloom: incoherent change ordered {o:.5}, shuffled {s:.5} ({:.1}x)", s / o);
+    assert!(s > 5.0 * o, "{s} vs {o}");
+}
+
+#[test]
+fn edge_darkening_sees_a_dark_rim_a_pale_rim_and_none() {
+    let b = bloom();
+    let ex = b.exemplar();
+    let masks: Vec<_> = (0..FRAMES).map(|t| b.mask(t)).collect();
+    // The exemplar's paint with its band ≤ 4 px inside the edge 30 % darker, and 30 % paler.
+    let rimmed = |factor: f32| -> Vec<Plane<Rgba>> {
+        (0..FRAMES)
+            .map(|t| {
+                let shape = Shape::from_coverage(&masks[t]);
+                let f = b.field(t);
+                let painted = Plane::from_fn(SIZE, SIZE, |x, y| {
+                    let c = f.get(x, y);
+                    if shape.sdf.get(x, y) + 0.5 <= eval::RIM_BAND { c.map(|v| (v * factor).min(1.0)) } else { c }
+                });
+                with_alpha(&painted, &masks[t])
+            })
+            .collect()
+    };
+    let opts = EvalOptions { patches: eval::PatchParams { samples: 64, ..Default::default() }, ..Default::default() };
+    let dark = eval::evaluate(&rimmed(0.7), &ex, &masks, &opts).unwrap().summary;
+    let pale = eval::evaluate(&rimmed(1.3), &ex, &masks, &opts).unwrap().summary;
+    println!(
+        "dark rim {:?} ({:?}), pale rim {:?} ({:?})",
+        dark.edge_darkening, dark.edge_darkening_ratio, pale.edge_darkening, pale.edge_darkening_ratio
+    );
+    assert!(dark.edge_darkening.unwrap() > 0.1, "{:?}", dark.edge_darkening);
+    assert!(pale.edge_darkening.unwrap() < -0.05, "{:?}", pale.edge_darkening);
+    // A band reaching past the interior's threshold is refused, naming the flag.
+    let bad = EvalOptions { rim: eval::RimParams { band: 13.0, ..Default::default() }, ..opts.clone() };
+    let e = eval::evaluate(&rimmed(0.7), &ex, &masks, &bad).unwrap_err().to_string();
+    assert!(e.contains("--rim-interior"), "{e}");
+}
+
+#[test]
+fn batched_evaluation_equals_the_whole() {
+    let b = Bloom { size: 64, frames: 9 };
+    let ex = b.exemplar();
+    let masks: Vec<_> = (0..9).map(|t| b.mask(t)).collect();
+    let out: Vec<_> = (0..9).map(|t| with_alpha(&b.field((t * 5) % 9), &masks[t])).collect();
+    let opts = EvalOptions { patches: eval::PatchParams { samples: 200, ..Default::default() }, ..Default::default() };
+    let whole = eval::evaluate(&out, &ex, &masks, &opts).unwrap();
+    let reference = eval::Reference::new(&ex, &opts).unwrap();
+    let mut ev = eval::Evaluator::new(&reference, &opts, 9, Painted::Alpha).unwrap();
+    for range in [0..4, 4..5, 5..9] {
+        ev.push(&out[range.clone()], &masks[range]).unwrap();
+    }
+    assert_eq!(ev.report(), whole);
+    // A range's summary is that range's per-frame values pooled.
+    let (part, frames) = ev.summary(3..6);
+    assert_eq!(frames.len(), 3);
+    assert_eq!(frames[0], whole.per_frame[3]);
+    let rims: Vec<f32> = frames.iter().filter_map(|f| f.edge_darkening).collect();
+    let mean = rims.iter().sum::<f32>() / rims.len() as f32;
+    assert!(close(part.edge_darkening.unwrap(), mean, 1e-6));
+    // A frame of another size is refused with its number.
+    let e = ev.push(&out[..1], &[Plane::filled(60, 64, 1.0)]).unwrap_err().to_string();
+    assert!(e.contains("target mask 10"), "{e}");
 }

@@ -51,6 +51,12 @@ pub struct Args {
     /// Output patches sampled for the nearest-neighbour distance.
     #[arg(long, default_value_t = 2048)]
     pub patch_samples: usize,
+    /// Edge darkening compares the band of pixels at most this far inside the edge…
+    #[arg(long, value_name = "PX", default_value_t = eval::RIM_BAND)]
+    pub rim_band: f32,
+    /// …with the interior of pixels farther inside than this.
+    #[arg(long, value_name = "PX", default_value_t = eval::RIM_INTERIOR)]
+    pub rim_interior: f32,
     /// Search radius of the block-matching flow, pixels per frame.
     #[arg(long, default_value_t = 6)]
     pub flow_radius: usize,
@@ -90,6 +96,7 @@ pub fn run(args: Args, ctx: &Ctx) -> anyhow::Result<()> {
         paint_threshold: args.paint_threshold,
         exemplar_step: args.src_speed,
         exemplar_scale: args.src_scale,
+        rim: eval::RimParams { band: args.rim_band, interior: args.rim_interior, ..defaults.rim },
         patches: eval::PatchParams { samples: args.patch_samples, seed: args.seed, ..defaults.patches },
         motion: eval::MotionParams {
             block: eval::BlockMatchParams { radius: args.flow_radius, ..defaults.motion.block },

@@ -271,45 +271,54 @@ impl Default for MotionParams {
 /// about 0.7. Compare values of similar shapes, or with the exemplar's own.
 pub fn motion_agreement(frames: &[Plane<f32>], shapes: &[Shape], params: &MotionParams) -> Measure {
     let n = frames.len().min(shapes.len());
-    let matcher = Matcher::new(&params.block);
-    let stride = params.stride.max(1);
     let means: Vec<Mean> = (0..n)
         .into_par_iter()
         .map(|i| {
             if i == 0 {
                 return Mean::default();
             }
-            let (sa, sb) = (&shapes[i - 1], &shapes[i]);
-            let (w, h) = sa.size();
-            let (ma, mb) = (sa.interior(params.edge_margin), sb.interior(params.edge_margin));
-            let mut points = Vec::new();
-            for y in (0..h).step_by(stride) {
-                for x in (0..w).step_by(stride) {
-                    let d = sa.sdf.get(x, y);
-                    if d <= 0.0 || d > params.band {
-                        continue;
-                    }
-                    match target_motion(sa, sb, x, y) {
-                        Some(m) if m.length() >= params.min_speed => points.push((x, y, m)),
-                        _ => {}
-                    }
-                }
-            }
-            let cosines: Vec<Option<f64>> = points
-                .par_iter()
-                .map(|&(x, y, m)| {
-                    let f = matcher.at(&frames[i - 1], &frames[i], Some((&ma, &mb)), x, y)?;
-                    let fl = f.length();
-                    Some(if fl < params.min_flow { 0.0 } else { (f.dot(m) / (fl * m.length())) as f64 })
-                })
-                .collect();
-            // Summed in point order: the same result whatever the thread count.
-            let mut mean = Mean::default();
-            cosines.into_iter().flatten().for_each(|c| mean.add(c));
-            mean
+            motion_pair_mean((&frames[i - 1], &shapes[i - 1]), (&frames[i], &shapes[i]), params)
         })
         .collect();
     Measure::from_means(&means)
+}
+
+/// The cosines of [`motion_agreement`] for one pair of frames `(prev, next)` (gray plane and
+/// shape each), summed in point order: the same result whatever the thread count.
+pub(crate) fn motion_pair_mean(
+    prev: (&Plane<f32>, &Shape),
+    next: (&Plane<f32>, &Shape),
+    params: &MotionParams,
+) -> Mean {
+    let matcher = Matcher::new(&params.block);
+    let stride = params.stride.max(1);
+    let (sa, sb) = (prev.1, next.1);
+    let (w, h) = sa.size();
+    let (ma, mb) = (sa.interior(params.edge_margin), sb.interior(params.edge_margin));
+    let mut points = Vec::new();
+    for y in (0..h).step_by(stride) {
+        for x in (0..w).step_by(stride) {
+            let d = sa.sdf.get(x, y);
+            if d <= 0.0 || d > params.band {
+                continue;
+            }
+            match target_motion(sa, sb, x, y) {
+                Some(m) if m.length() >= params.min_speed => points.push((x, y, m)),
+                _ => {}
+            }
+        }
+    }
+    let cosines: Vec<Option<f64>> = points
+        .par_iter()
+        .map(|&(x, y, m)| {
+            let f = matcher.at(prev.0, next.0, Some((&ma, &mb)), x, y)?;
+            let fl = f.length();
+            Some(if fl < params.min_flow { 0.0 } else { (f.dot(m) / (fl * m.length())) as f64 })
+        })
+        .collect();
+    let mut mean = Mean::default();
+    cosines.into_iter().flatten().for_each(|c| mean.add(c));
+    mean
 }
 
 #[cfg(test)]

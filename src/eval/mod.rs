@@ -10,8 +10,10 @@
 //! | coverage | [`coverage_iou`] | IoU of the painted area with the target masks; 1 = exact |
 //! | texture fidelity | [`patch_nn_distance`] | RMS distance of output 5×5 patches to their nearest exemplar patches; 0 = made of exemplar patches |
 //! | wash-out | [`local_contrast`] | mean 7×7 luma standard deviation of the interior; output / exemplar ≈ 1, a flat fill scores 0 |
+//! | edge darkening | [`edge_darkening`] | mean luma of the interior (> 12 px inside) minus that of the band ≤ 4 px inside the edge; output / exemplar ≈ 1 has the exemplar's dark rim, ≈ 0 none, < 0 a pale edge |
 //! | palette | [`palette_distance`] | per-channel Wasserstein distance of interior colors; 0 = same distribution |
 //! | temporal behaviour | [`temporal_change`] | mean change between consecutive frames in the stationary interior; output / exemplar ≈ 1 is exemplar-like, ≫ 1 flicker, ≈ 0 paint glued still |
+//! | boiling | [`incoherent_change`] | mean luma residual between consecutive frames after compensating their own optical flow ([`farneback_flow`]), ≥ 5 px inside both masks; output / exemplar ≈ 1 changes like the exemplar, ≫ 1 boils |
 //! | motion | [`motion_agreement`] | mean cosine between the paint's block-matching flow and the target's motion near moving boundaries; +1 with it, −1 against it |
 //!
 //! Conventions: colors are sRGB in `0..=1`; masks are coverage thresholded at 0.5 ([`Shape`]);
@@ -22,6 +24,10 @@
 //! composited over the exemplar's paper color before colors are measured; opaque outputs are
 //! measured as they are. Everything is deterministic (seeded sampling, fixed tie-breaking)
 //! and independent of the number of threads.
+//!
+//! [`evaluate`] measures a sequence held in memory; an [`Evaluator`] measures one pushed a
+//! batch of frames at a time against a [`Reference`] (the exemplar's side, prepared once), in
+//! memory that does not grow with the length, and can also summarize any range of frames.
 //!
 //! ```
 //! use fluidymation::eval::{local_contrast, Shape};
@@ -36,22 +42,27 @@
 //! assert!(local_contrast(&flat, &interior).unwrap() < 1e-6); // a flat fill has no texture
 //! ```
 
+mod coherence;
 mod contrast;
 mod coverage;
+mod evaluator;
 mod farneback;
 mod flow;
 mod palette;
 mod patches;
 pub mod plot;
 mod report;
+mod rim;
 mod shape;
 mod temporal;
 
+pub use coherence::{CoherenceParams, coherence_region, flow_residual, incoherent_change};
 pub use contrast::{CONTRAST_WINDOW, local_contrast, local_contrast_seq};
 pub use coverage::{
     OPAQUE_ALPHA, Painted, coverage_iou, detect_painted, estimate_background, has_alpha, intersection_union, iou,
     painted_mask,
 };
+pub use evaluator::{Evaluator, Reference, evaluate};
 pub use farneback::{FarnebackParams, MIN_LEVEL_SIDE, REGULARIZATION, farneback_flow, warp_bilinear};
 pub use flow::{
     BlockMatchParams, MotionParams, block_matching_flow, match_block, motion_agreement, target_motion,
@@ -60,12 +71,12 @@ pub use flow::{
 pub use palette::{ColorHistogram, HISTOGRAM_BINS, palette_distance};
 pub use patches::{PATCH_SIZE, PCA_DIMS, PatchIndex, PatchParams, patch_nn_distance, patch_nn_distance_with};
 pub use report::{ExemplarSummary, FrameStats, Report, Summary};
+pub use rim::{RIM_BAND, RIM_INTERIOR, RIM_MIN_PIXELS, RimParams, edge_darkening, edge_darkening_seq};
 pub use shape::{MASK_THRESHOLD, Shape, signed_distance};
 pub use temporal::{TemporalParams, frame_change, stationary_interior, temporal_change};
 
 use crate::error::{Error, Result};
-use crate::exemplar::Exemplar;
-use crate::img::{self, Plane, Rgb, Rgba};
+use crate::img::{Plane, Rgb, Rgba};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -91,8 +102,10 @@ pub fn ratio(a: Option<f32>, b: Option<f32>) -> Option<f32> {
 /// One metric over a sequence: the pooled value and the per-frame series.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Measure {
-    /// The value over the whole sequence (pooled over every sample of every frame, not the
-    /// mean of the per-frame values); `None` without samples.
+    /// The value over the whole sequence: pooled over every sample of every frame (not the
+    /// mean of the per-frame values), except for [`edge_darkening_seq`] and
+    /// [`incoherent_change`], whose value is the mean of the per-frame values; `None` without
+    /// samples.
     pub value: Option<f32>,
     /// The value per frame (index = frame); `None` for frames without samples.
     pub per_frame: Vec<Option<f32>>,
@@ -104,6 +117,13 @@ impl Measure {
     pub(crate) fn from_means(means: &[Mean]) -> Measure {
         let total = means.iter().fold(Mean::default(), |a, &b| a.merged(b));
         Measure { value: total.value(), per_frame: means.iter().map(Mean::value).collect(), samples: total.count }
+    }
+
+    /// The mean of the per-frame values that exist; `samples` counts them.
+    pub(crate) fn from_frame_values(per_frame: Vec<Option<f32>>) -> Measure {
+        let mut total = Mean::default();
+        per_frame.iter().flatten().for_each(|&v| total.add(v as f64));
+        Measure { value: total.value(), per_frame, samples: total.count }
     }
 }
 
@@ -164,6 +184,10 @@ pub struct EvalOptions {
     pub temporal: TemporalParams,
     /// [`motion_agreement`]'s points and block matcher. Default: [`MotionParams::default`].
     pub motion: MotionParams,
+    /// [`edge_darkening`]'s band and interior. Default: [`RimParams::default`].
+    pub rim: RimParams,
+    /// [`incoherent_change`]'s region and optical flow. Default: [`CoherenceParams::default`].
+    pub coherence: CoherenceParams,
     /// [`patch_nn_distance`]'s sampling (its seed is the seed of the whole evaluation).
     /// Default: [`PatchParams::default`].
     pub patches: PatchParams,
@@ -187,6 +211,8 @@ impl Default for EvalOptions {
             interior_margin: 5.0,
             temporal: TemporalParams::default(),
             motion: MotionParams::default(),
+            rim: RimParams::default(),
+            coherence: CoherenceParams::default(),
             patches: PatchParams::default(),
             background: None,
             paint_threshold: 0.1,
@@ -223,6 +249,19 @@ impl EvalOptions {
         check((1..=32).contains(&b.radius), "--flow-radius", b.radius, "1..=32 pixels")?;
         check(b.min_valid > 0.0 && b.min_valid <= 1.0, "motion.block.min_valid", b.min_valid, "a fraction in (0, 1]")?;
         check(finite_nonneg(b.min_texture), "motion.block.min_texture", b.min_texture, "a number >= 0")?;
+        let r = &self.rim;
+        check(r.band.is_finite() && r.band > 0.0, "--rim-band", r.band, "a distance > 0 pixels")?;
+        check(
+            r.interior.is_finite() && r.interior >= r.band,
+            "--rim-interior",
+            r.interior,
+            &format!("a distance >= the band ({} px)", r.band),
+        )?;
+        check(r.min_pixels >= 1, "rim.min_pixels", r.min_pixels, "at least 1")?;
+        check(finite_nonneg(self.coherence.margin), "coherence.margin", self.coherence.margin, "a number >= 0")?;
+        if let Some((name, value, allowed)) = self.coherence.flow.invalid() {
+            return Err(Error::param(&format!("coherence.flow.{name}"), value, allowed));
+        }
         let p = &self.patches;
         check(p.samples >= 1, "--patch-samples", p.samples, "at least 1")?;
         check(p.pool >= 1, "patches.pool", p.pool, "at least 1")?;
@@ -267,168 +306,4 @@ fn timed<T>(stage: &str, f: impl FnOnce() -> T) -> T {
     let out = f();
     log::debug!("eval: {} took {:.3} s", stage, start.elapsed().as_secs_f64());
     out
-}
-
-/// The exemplar as the synthesis sees it: every `step`-th frame, resized by `scale`.
-fn prepare_exemplar(exemplar: &Exemplar, step: usize, scale: f32) -> (Vec<Plane<Rgb>>, Vec<Plane<f32>>) {
-    let resize = |w: usize, h: usize| {
-        (((w as f32 * scale).round() as usize).max(1), ((h as f32 * scale).round() as usize).max(1))
-    };
-    let frames: Vec<Plane<Rgb>> = exemplar
-        .frames
-        .par_iter()
-        .step_by(step)
-        .map(|f| {
-            let (w, h) = resize(f.width(), f.height());
-            img::resize_bilinear(f, w, h)
-        })
-        .collect();
-    let masks: Vec<Plane<f32>> = exemplar
-        .masks
-        .par_iter()
-        .step_by(step)
-        .map(|m| {
-            let (w, h) = resize(m.width(), m.height());
-            img::resize_bilinear(m, w, h)
-        })
-        .collect();
-    (frames, masks)
-}
-
-/// Measures a stylized sequence.
-///
-/// `output` holds the stylized frames (straight RGBA: in the exemplar's colors with alpha =
-/// the target mask, or opaque, composited over a background), `target_masks` the target mask
-/// of each frame as coverage (`0..=1`, thresholded at 0.5), all of one size. Returns every
-/// metric of the [module documentation](self), pooled over the sequence and per frame, with
-/// the exemplar's own values where a ratio needs them.
-///
-/// Errors: [`Error::InvalidParam`] for an empty output, a mask count different from the frame
-/// count, frames or masks of different sizes, an empty exemplar, or an invalid option.
-pub fn evaluate(
-    output: &[Plane<Rgba>],
-    exemplar: &Exemplar,
-    target_masks: &[Plane<f32>],
-    options: &EvalOptions,
-) -> Result<Report> {
-    options.validate()?;
-    let first = output.first().ok_or_else(|| Error::param("output", "0 frames", "at least one frame"))?;
-    let (w, h) = first.size();
-    check(
-        target_masks.len() == output.len(),
-        "target_masks",
-        format!("{} masks", target_masks.len()),
-        &format!("one mask per output frame ({})", output.len()),
-    )?;
-    for (i, (f, m)) in output.iter().zip(target_masks).enumerate() {
-        for (what, size) in [("output frame", f.size()), ("target mask", m.size())] {
-            check(
-                size == (w, h),
-                &format!("{} {}", what, i + 1),
-                format!("{}x{}", size.0, size.1),
-                &format!("{}x{} like output frame 1", w, h),
-            )?;
-        }
-    }
-    check(
-        !exemplar.is_empty() && exemplar.frames.len() == exemplar.masks.len(),
-        "exemplar",
-        format!("{} frames, {} masks", exemplar.frames.len(), exemplar.masks.len()),
-        "at least one frame, each with a mask",
-    )?;
-    let step = options.exemplar_step.unwrap_or(exemplar.meta.speed).max(1);
-    let scale = options.exemplar_scale.unwrap_or(exemplar.meta.scale);
-    let scale = if scale.is_finite() && scale > 0.0 { scale } else { 1.0 };
-    let margin = options.interior_margin;
-
-    // Exemplar side.
-    let (ex_frames, ex_masks) = prepare_exemplar(exemplar, step, scale);
-    let ex_shapes = timed("exemplar distance fields", || Shape::sequence(&ex_masks));
-    let ex_regions: Vec<_> = ex_shapes.par_iter().map(|s| s.interior(margin)).collect();
-    let ex_luma: Vec<_> = ex_frames.par_iter().map(luma_plane).collect();
-    let ex_contrast = timed("exemplar contrast", || local_contrast_seq(&ex_frames, &ex_regions));
-    let ex_temporal = timed("exemplar temporal change", || temporal_change(&ex_frames, &ex_shapes, &options.temporal));
-    let ex_motion = timed("exemplar motion", || motion_agreement(&ex_luma, &ex_shapes, &options.motion));
-    let mut ex_hist = ColorHistogram::new();
-    for (f, r) in ex_frames.iter().zip(&ex_regions) {
-        ex_hist.add_masked(f, r);
-    }
-
-    // Output side.
-    let painted = detect_painted(output, options.background, options.paint_threshold);
-    let out_rgb = composite_output(output, &painted, exemplar.paper());
-    let shapes = timed("target distance fields", || Shape::sequence(target_masks));
-    let regions: Vec<_> = shapes.par_iter().map(|s| s.interior(margin)).collect();
-    let out_luma: Vec<_> = out_rgb.par_iter().map(luma_plane).collect();
-
-    let coverage = timed("coverage", || coverage_iou(output, &shapes, &painted));
-    let contrast = timed("contrast", || local_contrast_seq(&out_rgb, &regions));
-    let hists: Vec<ColorHistogram> =
-        out_rgb.par_iter().zip(&regions).map(|(f, r)| ColorHistogram::of_region(f, r)).collect();
-    let mut out_hist = ColorHistogram::new();
-    for hgram in &hists {
-        out_hist.merge(hgram);
-    }
-    let palette_frames: Vec<Option<[f32; 3]>> = hists.par_iter().map(|hg| hg.wasserstein(&ex_hist)).collect();
-    let palette = out_hist.wasserstein(&ex_hist);
-    let index = timed("patch index", || PatchIndex::build(&ex_frames, &ex_regions, &options.patches));
-    let patches = timed("patch search", || patch_nn_distance_with(&index, &out_rgb, &regions, &options.patches));
-    let temporal = timed("temporal change", || temporal_change(&out_rgb, &shapes, &options.temporal));
-    let motion = timed("motion", || motion_agreement(&out_luma, &shapes, &options.motion));
-
-    let n = output.len();
-    let at = |m: &Measure, i: usize| m.per_frame.get(i).copied().flatten();
-    let per_frame = (0..n)
-        .map(|i| FrameStats {
-            frame: i + 1,
-            coverage_iou: at(&coverage, i),
-            local_contrast: at(&contrast, i),
-            contrast_ratio: ratio(at(&contrast, i), ex_contrast.value),
-            palette_distance: palette_frames[i],
-            patch_nn_distance: at(&patches, i),
-            temporal_change: at(&temporal, i),
-            temporal_change_ratio: ratio(at(&temporal, i), ex_temporal.value),
-            motion_agreement: at(&motion, i),
-        })
-        .collect();
-    let summary = Summary {
-        coverage_iou: coverage.value,
-        local_contrast: contrast.value,
-        contrast_ratio: ratio(contrast.value, ex_contrast.value),
-        palette_distance: palette,
-        palette_distance_mean: palette.map(|p| (p[0] + p[1] + p[2]) / 3.0),
-        patch_nn_distance: patches.value,
-        temporal_change: temporal.value,
-        temporal_change_ratio: ratio(temporal.value, ex_temporal.value),
-        motion_agreement: motion.value,
-        interior_pixels: out_hist.len(),
-        patch_samples: patches.samples,
-        temporal_pixels: temporal.samples,
-        motion_points: motion.samples,
-    };
-    let exemplar_summary = ExemplarSummary {
-        name: exemplar.meta.name.clone(),
-        frames: ex_frames.len(),
-        width: ex_frames[0].width(),
-        height: ex_frames[0].height(),
-        step,
-        scale,
-        local_contrast: ex_contrast.value,
-        temporal_change: ex_temporal.value,
-        motion_agreement: ex_motion.value,
-        interior_pixels: ex_hist.len(),
-        patch_pool: index.len() as u64,
-        temporal_pixels: ex_temporal.samples,
-        motion_points: ex_motion.samples,
-    };
-    Ok(Report {
-        frames: n,
-        width: w,
-        height: h,
-        exemplar: exemplar_summary,
-        painted,
-        summary,
-        per_frame,
-        options: options.clone(),
-    })
 }

@@ -369,40 +369,47 @@ pub fn patch_nn_distance_with(
         return Measure::default();
     }
     let per_frame_samples = params.samples.div_ceil(n).max(1);
-    // Draw every query up front (deterministic), then search in parallel.
-    let queries: Vec<(usize, usize, usize)> = (0..n)
-        .into_par_iter()
-        .map(|f| {
-            let list = centers(&out_regions[f]);
-            if list.is_empty() {
-                return Vec::new();
-            }
-            let mut rng = Rng::new(params.seed.wrapping_add(0x9E37_79B9).wrapping_mul(f as u64 + 1));
-            let w = output[f].width();
-            (0..per_frame_samples.min(list.len()))
-                .map(|_| {
-                    let p = list[rng.below(list.len())] as usize;
-                    (f, p % w, p / w)
-                })
-                .collect::<Vec<_>>()
+    let means: Vec<Mean> = (0..n)
+        .map(|f| frame_patch_mean(index, &output[f], &out_regions[f], f, per_frame_samples, params.seed))
+        .collect();
+    Measure::from_means(&means)
+}
+
+/// The patch statistic of frame `f` of a sequence: `samples` query centers drawn in `region`
+/// (seeded by `seed` and `f`, so a frame's queries do not depend on the other frames) and the
+/// mean of their nearest-patch distances.
+pub(crate) fn frame_patch_mean(
+    index: &PatchIndex<'_>,
+    img: &Plane<Rgb>,
+    region: &Mask,
+    f: usize,
+    samples: usize,
+    seed: u64,
+) -> Mean {
+    let list = centers(region);
+    if list.is_empty() {
+        return Mean::default();
+    }
+    let mut rng = Rng::new(seed.wrapping_add(0x9E37_79B9).wrapping_mul(f as u64 + 1));
+    let w = img.width();
+    let queries: Vec<(usize, usize)> = (0..samples.min(list.len()))
+        .map(|_| {
+            let p = list[rng.below(list.len())] as usize;
+            (p % w, p / w)
         })
-        .collect::<Vec<_>>()
-        .concat();
+        .collect();
     let dists: Vec<Option<f32>> = queries
         .par_iter()
-        .map(|&(f, x, y)| {
+        .map(|&(x, y)| {
             let mut buf = [0f32; DIM];
-            extract(&output[f], x, y, &mut buf);
+            extract(img, x, y, &mut buf);
             index.nearest(&buf)
         })
         .collect();
-    let mut means = vec![Mean::default(); n];
-    for (&(f, _, _), d) in queries.iter().zip(&dists) {
-        if let Some(d) = d {
-            means[f].add(*d as f64);
-        }
-    }
-    Measure::from_means(&means)
+    // Summed in query order: the same result whatever the thread count.
+    let mut mean = Mean::default();
+    dists.into_iter().flatten().for_each(|d| mean.add(d as f64));
+    mean
 }
 
 #[cfg(test)]

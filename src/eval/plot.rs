@@ -2,10 +2,11 @@
 //!
 //! The chart is built as an SVG document ([`plot_svg`]) and rasterized with resvg — no
 //! plotting dependency. It is a stack of panels with fixed order and colors, top to bottom:
-//! coverage IoU (0..1), local-contrast ratio (reference line at 1), palette distance (red,
-//! green and blue lines), patch nearest-neighbour distance, temporal-change ratio (reference
-//! line at 1) and motion agreement (−1..1, reference line at 0); the x axis is the frame
-//! number. Missing values leave gaps.
+//! coverage IoU (0..1), local-contrast ratio (reference line at 1), edge-darkening ratio
+//! (reference line at 1; below 0 when the edge is paler than the interior), palette distance
+//! (red, green and blue lines), patch nearest-neighbour distance, temporal-change ratio
+//! (reference line at 1), incoherent-change ratio (reference line at 1) and motion agreement
+//! (−1..1, reference line at 0); the x axis is the frame number. Missing values leave gaps.
 //!
 //! **Fonts.** Titles and tick labels are SVG text, drawn with whatever fonts the system has
 //! (DejaVu Sans when installed, else the first font found). On a machine without any font
@@ -24,7 +25,7 @@ use std::sync::{Arc, OnceLock};
 pub struct PlotOptions {
     /// Width in pixels. Default: 960.
     pub width: u32,
-    /// Height of each of the six panels, pixels. Default: 120.
+    /// Height of each of the eight panels, pixels. Default: 120.
     pub panel_height: u32,
 }
 
@@ -47,7 +48,8 @@ struct Panel {
     title: &'static str,
     /// (color, values) per line.
     lines: Vec<(&'static str, Vec<Option<f32>>)>,
-    /// Fixed y range, or `None` for 0..max (at least `min_top`).
+    /// Fixed y range, or `None` for 0..max (at least `min_top`), extended below 0 when a value
+    /// is negative.
     range: Option<(f32, f32)>,
     min_top: f32,
     reference: Option<f32>,
@@ -101,6 +103,13 @@ pub fn plot_svg(report: &Report, options: &PlotOptions) -> String {
             reference: Some(1.0),
         },
         Panel {
+            title: "edge darkening ratio (output / exemplar; ~1 good, ~0 no rim, <0 pale edge)",
+            lines: vec![("#e377c2", series(|f| f.edge_darkening_ratio))],
+            range: None,
+            min_top: 1.5,
+            reference: Some(1.0),
+        },
+        Panel {
             title: "palette distance W1 (R, G, B)",
             lines: vec![("#d62728", channel(0)), ("#2ca02c", channel(1)), ("#1f3fd4", channel(2))],
             range: None,
@@ -117,6 +126,13 @@ pub fn plot_svg(report: &Report, options: &PlotOptions) -> String {
         Panel {
             title: "temporal change ratio (output / exemplar; ~1 good, >>1 flicker, ~0 glued)",
             lines: vec![("#8c564b", series(|f| f.temporal_change_ratio))],
+            range: None,
+            min_top: 2.0,
+            reference: Some(1.0),
+        },
+        Panel {
+            title: "incoherent change ratio (flow-compensated, output / exemplar; ~1 good, >>1 boiling)",
+            lines: vec![("#bcbd22", series(|f| f.incoherent_change_ratio))],
             range: None,
             min_top: 2.0,
             reference: Some(1.0),
@@ -153,9 +169,10 @@ pub fn plot_svg(report: &Report, options: &PlotOptions) -> String {
     for (k, p) in panels.iter().enumerate() {
         let top = TOP + k as f64 * (TITLE + ph + GAP) + TITLE;
         let (lo, hi) = p.range.unwrap_or_else(|| {
-            let max = p.lines.iter().flat_map(|(_, v)| v.iter().flatten()).fold(0f32, |a, &b| a.max(b));
-            let max = if max.is_finite() { max } else { 0.0 };
-            (0.0, (max * 1.1).max(p.min_top))
+            let values = || p.lines.iter().flat_map(|(_, v)| v.iter().flatten()).filter(|v| v.is_finite());
+            let max = values().fold(0f32, |a, &b| a.max(b));
+            let min = values().fold(0f32, |a, &b| a.min(b));
+            (min * 1.1, (max * 1.1).max(p.min_top))
         });
         let (lo, hi) = (lo as f64, hi as f64);
         // Values map into the panel less a small padding, so lines at the limits stay visible.
@@ -282,12 +299,15 @@ fn rasterize_with(
     options: &PlotOptions,
     db: Arc<usvg::fontdb::Database>,
 ) -> std::result::Result<tiny_skia::Pixmap, String> {
-    let svg = plot_svg(report, options);
+    svg_pixmap(&plot_svg(report, options), db)
+}
+
+fn svg_pixmap(svg: &str, db: Arc<usvg::fontdb::Database>) -> std::result::Result<tiny_skia::Pixmap, String> {
     if db.is_empty() {
-        log::warn!("no fonts found on this system; the chart is drawn without labels");
+        log::warn!("no fonts found on this system; the picture is drawn without labels");
     }
     let opt = usvg::Options { fontdb: db, ..Default::default() };
-    let tree = usvg::Tree::from_str(&svg, &opt).map_err(|e| e.to_string())?;
+    let tree = usvg::Tree::from_str(svg, &opt).map_err(|e| e.to_string())?;
     let size = tree.size().to_int_size();
     let mut pixmap = tiny_skia::Pixmap::new(size.width(), size.height()).ok_or("the chart has no area")?;
     resvg::render(&tree, tiny_skia::Transform::default(), &mut pixmap.as_mut());
@@ -340,6 +360,8 @@ mod tests {
                 local_contrast: Some(0.1),
                 temporal_change: Some(0.1),
                 motion_agreement: None,
+                edge_darkening: Some(0.05),
+                incoherent_change: Some(0.02),
                 interior_pixels: 1,
                 patch_pool: 1,
                 temporal_pixels: 1,
@@ -356,10 +378,16 @@ mod tests {
                 temporal_change: None,
                 temporal_change_ratio: None,
                 motion_agreement: None,
+                edge_darkening: None,
+                edge_darkening_ratio: None,
+                incoherent_change: None,
+                incoherent_change_ratio: None,
                 interior_pixels: 0,
                 patch_samples: 0,
                 temporal_pixels: 0,
                 motion_points: 0,
+                rim_frames: 0,
+                incoherent_pixels: 0,
             },
             per_frame: (0..frames)
                 .map(|i| FrameStats {
@@ -372,6 +400,10 @@ mod tests {
                     temporal_change: series(i),
                     temporal_change_ratio: series(i),
                     motion_agreement: series(i),
+                    edge_darkening: series(i),
+                    edge_darkening_ratio: series(i).map(|v| 1.0 - v),
+                    incoherent_change: series(i),
+                    incoherent_change_ratio: series(i),
                 })
                 .collect(),
             options: Default::default(),

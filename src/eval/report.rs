@@ -25,6 +25,14 @@ pub struct ExemplarSummary {
     pub temporal_change: Option<f32>,
     /// Its own motion agreement with its masks' motion (how its paint flows as it spreads).
     pub motion_agreement: Option<f32>,
+    /// Its own edge darkening (luma of the interior minus that of the band inside the edge,
+    /// mean over its frames).
+    #[serde(default)]
+    pub edge_darkening: Option<f32>,
+    /// Its own incoherent change (flow-compensated change between consecutive frames, mean
+    /// over its pairs).
+    #[serde(default)]
+    pub incoherent_change: Option<f32>,
     /// Interior pixels over all its frames (the palette reference).
     pub interior_pixels: u64,
     /// Exemplar patches indexed for the nearest-neighbour statistic.
@@ -56,6 +64,20 @@ pub struct Summary {
     pub temporal_change_ratio: Option<f32>,
     /// Mean cosine between the paint's flow and the target's motion near moving boundaries.
     pub motion_agreement: Option<f32>,
+    /// Edge darkening: mean luma of the interior (> 12 px inside) minus that of the band
+    /// (≤ 4 px inside the edge), mean over frames; > 0 when the edge is darker.
+    #[serde(default)]
+    pub edge_darkening: Option<f32>,
+    /// `edge_darkening` / the exemplar's: ≈ 1 has the exemplar's rim, ≈ 0 none, < 0 a pale edge.
+    #[serde(default)]
+    pub edge_darkening_ratio: Option<f32>,
+    /// Incoherent change: mean absolute luma residual between consecutive frames after
+    /// compensating their optical flow, mean over pairs.
+    #[serde(default)]
+    pub incoherent_change: Option<f32>,
+    /// `incoherent_change` / the exemplar's: ≈ 1 changes like the exemplar, ≫ 1 boils.
+    #[serde(default)]
+    pub incoherent_change_ratio: Option<f32>,
     /// Interior pixels over all frames (behind contrast and palette).
     pub interior_pixels: u64,
     /// Output patches sampled for `patch_nn_distance`.
@@ -64,6 +86,12 @@ pub struct Summary {
     pub temporal_pixels: u64,
     /// Points behind `motion_agreement`.
     pub motion_points: u64,
+    /// Frames behind `edge_darkening`.
+    #[serde(default)]
+    pub rim_frames: u64,
+    /// Pixels behind `incoherent_change`.
+    #[serde(default)]
+    pub incoherent_pixels: u64,
 }
 
 /// The metrics of one frame (`None` where the frame has nothing to measure; temporal change
@@ -88,6 +116,18 @@ pub struct FrameStats {
     pub temporal_change_ratio: Option<f32>,
     /// Mean cosine of the flow since the previous frame with the target's motion.
     pub motion_agreement: Option<f32>,
+    /// Edge darkening of this frame.
+    #[serde(default)]
+    pub edge_darkening: Option<f32>,
+    /// `edge_darkening` / the exemplar's (mean over its frames).
+    #[serde(default)]
+    pub edge_darkening_ratio: Option<f32>,
+    /// Flow-compensated change since the previous frame.
+    #[serde(default)]
+    pub incoherent_change: Option<f32>,
+    /// `incoherent_change` / the exemplar's (mean over its pairs).
+    #[serde(default)]
+    pub incoherent_change_ratio: Option<f32>,
 }
 
 /// Everything [`super::evaluate`] measured.
@@ -130,20 +170,33 @@ impl Report {
         let mut s = String::new();
         let _ = writeln!(
             s,
-            "{:>5}  {:>7}  {:>8}  {:>8}  {:>8}  {:>8}  {:>8}  {:>8}",
-            "frame", "IoU", "contrast", "c.ratio", "palette", "patch NN", "t.ratio", "motion"
+            "{:>5}  {:>7}  {:>8}  {:>8}  {:>8}  {:>8}  {:>8}  {:>8}  {:>8}  {:>8}  {:>8}",
+            "frame",
+            "IoU",
+            "contrast",
+            "c.ratio",
+            "rim",
+            "r.ratio",
+            "palette",
+            "patch NN",
+            "t.ratio",
+            "i.ratio",
+            "motion"
         );
         for f in &self.per_frame {
             let _ = writeln!(
                 s,
-                "{:>5}  {:>7}  {:>8}  {:>8}  {:>8}  {:>8}  {:>8}  {:>8}",
+                "{:>5}  {:>7}  {:>8}  {:>8}  {:>8}  {:>8}  {:>8}  {:>8}  {:>8}  {:>8}  {:>8}",
                 f.frame,
                 num(f.coverage_iou),
                 num(f.local_contrast),
                 num(f.contrast_ratio),
+                num(f.edge_darkening),
+                num(f.edge_darkening_ratio),
                 num(f.palette_distance.map(|p| (p[0] + p[1] + p[2]) / 3.0)),
                 num(f.patch_nn_distance),
                 num(f.temporal_change_ratio),
+                num(f.incoherent_change_ratio),
                 num(f.motion_agreement),
             );
         }
@@ -184,6 +237,14 @@ impl fmt::Display for Report {
             s.palette_distance.map(|p| format!(" (R {:.4}, G {:.4}, B {:.4})", p[0], p[1], p[2])).unwrap_or_default();
         row(
             f,
+            "edge darkening (interior - rim band)",
+            num(s.edge_darkening),
+            num(e.edge_darkening),
+            num(s.edge_darkening_ratio),
+            "ratio ~1; ~0 no rim; <0 pale edge",
+        )?;
+        row(
+            f,
             "palette distance (W1, mean of RGB)",
             num(s.palette_distance_mean),
             String::new(),
@@ -208,6 +269,14 @@ impl fmt::Display for Report {
         )?;
         row(
             f,
+            "incoherent change (flow-compensated)",
+            num(s.incoherent_change),
+            num(e.incoherent_change),
+            num(s.incoherent_change_ratio),
+            "ratio ~1; >>1 boiling",
+        )?;
+        row(
+            f,
             "motion agreement (mean cosine)",
             num(s.motion_agreement),
             num(e.motion_agreement),
@@ -217,8 +286,15 @@ impl fmt::Display for Report {
         writeln!(f)?;
         write!(
             f,
-            "samples: {} interior pixels, {} patches against {} exemplar patches, {} stationary pixels, {} motion points",
-            s.interior_pixels, s.patch_samples, e.patch_pool, s.temporal_pixels, s.motion_points
+            "samples: {} interior pixels, {} patches against {} exemplar patches, {} stationary pixels, {} motion points, \
+             {} frames with a rim value, {} flow-compensated pixels",
+            s.interior_pixels,
+            s.patch_samples,
+            e.patch_pool,
+            s.temporal_pixels,
+            s.motion_points,
+            s.rim_frames,
+            s.incoherent_pixels
         )
     }
 }

@@ -1,0 +1,432 @@
+//! The evaluation itself: the exemplar's side prepared once ([`Reference`]), output frames
+//! measured batch by batch ([`Evaluator`]), and [`evaluate`] doing both for a whole sequence.
+
+use super::coherence::pair_residual;
+use super::contrast::local_contrast_mean;
+use super::flow::motion_pair_mean;
+use super::patches::frame_patch_mean;
+use super::temporal::frame_change_mean;
+use super::{
+    ColorHistogram, EvalOptions, ExemplarSummary, FrameStats, Mean, Measure, Painted, PatchIndex, Report, Shape,
+    Summary, check, composite_output, detect_painted, edge_darkening, edge_darkening_seq, incoherent_change,
+    intersection_union, local_contrast_seq, luma_plane, motion_agreement, painted_mask, ratio, stationary_interior,
+    temporal_change, timed,
+};
+use crate::error::{Error, Result};
+use crate::exemplar::Exemplar;
+use crate::img::{self, Mask, Plane, Rgb, Rgba};
+use rayon::prelude::*;
+use std::ops::Range;
+
+/// The exemplar as the synthesis sees it: every `step`-th frame, resized by `scale`.
+fn prepare_exemplar(exemplar: &Exemplar, step: usize, scale: f32) -> (Vec<Plane<Rgb>>, Vec<Plane<f32>>) {
+    let resize = |w: usize, h: usize| {
+        (((w as f32 * scale).round() as usize).max(1), ((h as f32 * scale).round() as usize).max(1))
+    };
+    let frames: Vec<Plane<Rgb>> = exemplar
+        .frames
+        .par_iter()
+        .step_by(step)
+        .map(|f| {
+            let (w, h) = resize(f.width(), f.height());
+            img::resize_bilinear(f, w, h)
+        })
+        .collect();
+    let masks: Vec<Plane<f32>> = exemplar
+        .masks
+        .par_iter()
+        .step_by(step)
+        .map(|m| {
+            let (w, h) = resize(m.width(), m.height());
+            img::resize_bilinear(m, w, h)
+        })
+        .collect();
+    (frames, masks)
+}
+
+/// The exemplar's side of an evaluation, measured once: its frames and masks as the synthesis
+/// sees them (every `step`-th frame, resized by `scale`, per [`EvalOptions::exemplar_step`]
+/// and [`EvalOptions::exemplar_scale`]) and its own values of every measure that is compared
+/// by a ratio.
+pub struct Reference {
+    name: String,
+    step: usize,
+    scale: f32,
+    paper: Rgb,
+    frames: Vec<Plane<Rgb>>,
+    masks: Vec<Plane<f32>>,
+    regions: Vec<Mask>,
+    contrast: Measure,
+    temporal: Measure,
+    motion: Measure,
+    rim: Measure,
+    coherence: Measure,
+    hist: ColorHistogram,
+}
+
+impl Reference {
+    /// Measures `exemplar`. Errors: [`Error::InvalidParam`] for an invalid option or an empty
+    /// exemplar.
+    pub fn new(exemplar: &Exemplar, options: &EvalOptions) -> Result<Reference> {
+        options.validate()?;
+        check(
+            !exemplar.is_empty() && exemplar.frames.len() == exemplar.masks.len(),
+            "exemplar",
+            format!("{} frames, {} masks", exemplar.frames.len(), exemplar.masks.len()),
+            "at least one frame, each with a mask",
+        )?;
+        let step = options.exemplar_step.unwrap_or(exemplar.meta.speed).max(1);
+        let scale = options.exemplar_scale.unwrap_or(exemplar.meta.scale);
+        let scale = if scale.is_finite() && scale > 0.0 { scale } else { 1.0 };
+        let (frames, masks) = prepare_exemplar(exemplar, step, scale);
+        let shapes = timed("exemplar distance fields", || Shape::sequence(&masks));
+        let regions: Vec<Mask> = shapes.par_iter().map(|s| s.interior(options.interior_margin)).collect();
+        let lumas: Vec<Plane<f32>> = frames.par_iter().map(luma_plane).collect();
+        let contrast = timed("exemplar contrast", || local_contrast_seq(&frames, &regions));
+        let temporal = timed("exemplar temporal change", || temporal_change(&frames, &shapes, &options.temporal));
+        let motion = timed("exemplar motion", || motion_agreement(&lumas, &shapes, &options.motion));
+        let rim = timed("exemplar edge darkening", || edge_darkening_seq(&frames, &shapes, &options.rim));
+        let coherence = timed("exemplar incoherent change", || incoherent_change(&lumas, &shapes, &options.coherence));
+        let mut hist = ColorHistogram::new();
+        for (f, r) in frames.iter().zip(&regions) {
+            hist.add_masked(f, r);
+        }
+        Ok(Reference {
+            name: exemplar.meta.name.clone(),
+            step,
+            scale,
+            paper: exemplar.paper(),
+            frames,
+            masks,
+            regions,
+            contrast,
+            temporal,
+            motion,
+            rim,
+            coherence,
+            hist,
+        })
+    }
+
+    /// The exemplar's frames as measured (after its step and scale).
+    pub fn frames(&self) -> &[Plane<Rgb>] {
+        &self.frames
+    }
+
+    /// The exemplar's masks as measured (coverage, after its step and scale).
+    pub fn masks(&self) -> &[Plane<f32>] {
+        &self.masks
+    }
+
+    /// Its paper color (from its metadata): outputs with alpha are composited over it.
+    pub fn paper(&self) -> Rgb {
+        self.paper
+    }
+
+    /// Its own edge darkening ([`super::edge_darkening`], mean over its frames).
+    pub fn edge_darkening(&self) -> Option<f32> {
+        self.rim.value
+    }
+
+    fn summary(&self, patch_pool: u64) -> ExemplarSummary {
+        ExemplarSummary {
+            name: self.name.clone(),
+            frames: self.frames.len(),
+            width: self.frames[0].width(),
+            height: self.frames[0].height(),
+            step: self.step,
+            scale: self.scale,
+            local_contrast: self.contrast.value,
+            temporal_change: self.temporal.value,
+            motion_agreement: self.motion.value,
+            edge_darkening: self.rim.value,
+            incoherent_change: self.coherence.value,
+            interior_pixels: self.hist.len(),
+            patch_pool,
+            temporal_pixels: self.temporal.samples,
+            motion_points: self.motion.samples,
+        }
+    }
+}
+
+/// What one output frame contributed.
+#[derive(Clone)]
+struct FrameTotals {
+    /// Intersection and union of the painted area with the target mask.
+    coverage: (u64, u64),
+    contrast: Mean,
+    hist: ColorHistogram,
+    patches: Mean,
+    temporal: Mean,
+    motion: Mean,
+    rim: Option<f32>,
+    coherence: (Option<f32>, u64),
+}
+
+/// The last frame of the previous batch, for the measures of consecutive pairs.
+struct Previous {
+    rgb: Plane<Rgb>,
+    luma: Plane<f32>,
+    shape: Shape,
+}
+
+/// Measures an output sequence a batch of frames at a time, so that memory does not grow
+/// with its length (beyond a few numbers and one color histogram per frame): push frames in
+/// order with [`Evaluator::push`], then ask for the [`Evaluator::report`] of all of them or
+/// the [`Evaluator::summary`] of a range of them.
+///
+/// The result is exactly [`evaluate`]'s on the same frames, however they are batched.
+pub struct Evaluator<'a> {
+    reference: &'a Reference,
+    index: PatchIndex<'a>,
+    options: EvalOptions,
+    painted: Painted,
+    /// The sequence length the patch samples are spread over.
+    expected: usize,
+    size: Option<(usize, usize)>,
+    frames: Vec<FrameTotals>,
+    prev: Option<Previous>,
+}
+
+impl<'a> Evaluator<'a> {
+    /// An evaluator of a sequence of `frames` frames (the number over which
+    /// [`super::PatchParams::samples`] are spread; more or fewer may be pushed) whose painted
+    /// pixels are told by `painted` (see [`detect_painted`]). `options` should be the ones
+    /// `reference` was made with.
+    pub fn new(reference: &'a Reference, options: &EvalOptions, frames: usize, painted: Painted) -> Result<Self> {
+        options.validate()?;
+        let index = timed("patch index", || PatchIndex::build(&reference.frames, &reference.regions, &options.patches));
+        Ok(Evaluator {
+            reference,
+            index,
+            options: options.clone(),
+            painted,
+            expected: frames.max(1),
+            size: None,
+            frames: Vec::new(),
+            prev: None,
+        })
+    }
+
+    /// Frames pushed so far.
+    pub fn len(&self) -> usize {
+        self.frames.len()
+    }
+
+    /// True before the first frame.
+    pub fn is_empty(&self) -> bool {
+        self.frames.is_empty()
+    }
+
+    /// Measures the next frames: `output[i]` (straight RGBA, see [`evaluate`]) with its target
+    /// coverage `masks[i]`, all of the size of the first frame ever pushed. Frames of a batch
+    /// are measured in parallel.
+    pub fn push(&mut self, output: &[Plane<Rgba>], masks: &[Plane<f32>]) -> Result<()> {
+        check(
+            masks.len() == output.len(),
+            "target_masks",
+            format!("{} masks", masks.len()),
+            &format!("one mask per output frame ({})", output.len()),
+        )?;
+        let Some(first) = output.first() else { return Ok(()) };
+        let (w, h) = *self.size.get_or_insert(first.size());
+        for (i, (f, m)) in output.iter().zip(masks).enumerate() {
+            for (what, size) in [("output frame", f.size()), ("target mask", m.size())] {
+                check(
+                    size == (w, h),
+                    &format!("{} {}", what, self.frames.len() + i + 1),
+                    format!("{}x{}", size.0, size.1),
+                    &format!("{}x{} like output frame 1", w, h),
+                )?;
+            }
+        }
+        let o = &self.options;
+        let rgb = composite_output(output, &self.painted, self.reference.paper);
+        let shapes = Shape::sequence(masks);
+        let lumas: Vec<Plane<f32>> = rgb.par_iter().map(luma_plane).collect();
+        let offset = self.frames.len();
+        let per_frame_samples = o.patches.samples.div_ceil(self.expected).max(1);
+        let prev = self.prev.as_ref();
+        let totals: Vec<FrameTotals> = (0..output.len())
+            .into_par_iter()
+            .map(|i| {
+                let shape = &shapes[i];
+                let region = shape.interior(o.interior_margin);
+                let before = if i > 0 {
+                    Some((&rgb[i - 1], &lumas[i - 1], &shapes[i - 1]))
+                } else {
+                    prev.map(|p| (&p.rgb, &p.luma, &p.shape))
+                };
+                let (temporal, motion, coherence) = match before {
+                    Some((prgb, pluma, pshape)) => {
+                        let still = stationary_interior(pshape, shape, &o.temporal);
+                        (
+                            frame_change_mean(prgb, &rgb[i], &still),
+                            motion_pair_mean((pluma, pshape), (&lumas[i], shape), &o.motion),
+                            pair_residual((pluma, pshape), (&lumas[i], shape), &o.coherence),
+                        )
+                    }
+                    None => (Mean::default(), Mean::default(), (None, 0)),
+                };
+                FrameTotals {
+                    coverage: intersection_union(&painted_mask(&output[i], &self.painted), &shape.mask),
+                    contrast: local_contrast_mean(&rgb[i], &region),
+                    hist: ColorHistogram::of_region(&rgb[i], &region),
+                    patches: frame_patch_mean(
+                        &self.index,
+                        &rgb[i],
+                        &region,
+                        offset + i,
+                        per_frame_samples,
+                        o.patches.seed,
+                    ),
+                    temporal,
+                    motion,
+                    rim: edge_darkening(&rgb[i], shape, &o.rim),
+                    coherence,
+                }
+            })
+            .collect();
+        self.frames.extend(totals);
+        if let (Some(rgb), Some(luma), Some(shape)) =
+            (rgb.into_iter().last(), lumas.into_iter().last(), shapes.into_iter().last())
+        {
+            self.prev = Some(Previous { rgb, luma, shape });
+        }
+        Ok(())
+    }
+
+    /// Every measure over the frames in `range` (0-based; measures of a pair count at its
+    /// second frame, so the first frame of a range still compares with the frame before it),
+    /// pooled or averaged as over a whole sequence, and their per-frame values.
+    pub fn summary(&self, range: Range<usize>) -> (Summary, Vec<FrameStats>) {
+        let range = range.start.min(self.frames.len())..range.end.min(self.frames.len());
+        let frames = &self.frames[range.clone()];
+        let r = self.reference;
+        let pooled = |f: fn(&FrameTotals) -> Mean| Measure::from_means(&frames.iter().map(f).collect::<Vec<_>>());
+        let contrast = pooled(|t| t.contrast);
+        let patches = pooled(|t| t.patches);
+        let temporal = pooled(|t| t.temporal);
+        let motion = pooled(|t| t.motion);
+        let rim = Measure::from_frame_values(frames.iter().map(|t| t.rim).collect());
+        let coherence = Measure {
+            samples: frames.iter().map(|t| t.coherence.1).sum(),
+            ..Measure::from_frame_values(frames.iter().map(|t| t.coherence.0).collect())
+        };
+        let (si, su) = frames.iter().fold((0u64, 0u64), |(a, b), t| (a + t.coverage.0, b + t.coverage.1));
+        let coverage = if frames.is_empty() {
+            None
+        } else if su == 0 {
+            Some(1.0)
+        } else {
+            Some((si as f64 / su as f64) as f32)
+        };
+        let mut hist = ColorHistogram::new();
+        for t in frames {
+            hist.merge(&t.hist);
+        }
+        let palette = hist.wasserstein(&r.hist);
+        let per_frame = frames
+            .par_iter()
+            .enumerate()
+            .map(|(k, t)| {
+                let (i, u) = t.coverage;
+                FrameStats {
+                    frame: range.start + k + 1,
+                    coverage_iou: Some(if u == 0 { 1.0 } else { (i as f64 / u as f64) as f32 }),
+                    local_contrast: t.contrast.value(),
+                    contrast_ratio: ratio(t.contrast.value(), r.contrast.value),
+                    palette_distance: t.hist.wasserstein(&r.hist),
+                    patch_nn_distance: t.patches.value(),
+                    temporal_change: t.temporal.value(),
+                    temporal_change_ratio: ratio(t.temporal.value(), r.temporal.value),
+                    motion_agreement: t.motion.value(),
+                    edge_darkening: t.rim,
+                    edge_darkening_ratio: ratio(t.rim, r.rim.value),
+                    incoherent_change: t.coherence.0,
+                    incoherent_change_ratio: ratio(t.coherence.0, r.coherence.value),
+                }
+            })
+            .collect();
+        let summary = Summary {
+            coverage_iou: coverage,
+            local_contrast: contrast.value,
+            contrast_ratio: ratio(contrast.value, r.contrast.value),
+            palette_distance: palette,
+            palette_distance_mean: palette.map(|p| (p[0] + p[1] + p[2]) / 3.0),
+            patch_nn_distance: patches.value,
+            temporal_change: temporal.value,
+            temporal_change_ratio: ratio(temporal.value, r.temporal.value),
+            motion_agreement: motion.value,
+            edge_darkening: rim.value,
+            edge_darkening_ratio: ratio(rim.value, r.rim.value),
+            incoherent_change: coherence.value,
+            incoherent_change_ratio: ratio(coherence.value, r.coherence.value),
+            interior_pixels: hist.len(),
+            patch_samples: patches.samples,
+            temporal_pixels: temporal.samples,
+            motion_points: motion.samples,
+            rim_frames: rim.samples,
+            incoherent_pixels: coherence.samples,
+        };
+        (summary, per_frame)
+    }
+
+    /// Every measure over all frames pushed.
+    pub fn report(&self) -> Report {
+        let (summary, per_frame) = self.summary(0..self.frames.len());
+        let (width, height) = self.size.unwrap_or((0, 0));
+        Report {
+            frames: self.frames.len(),
+            width,
+            height,
+            exemplar: self.reference.summary(self.index.len() as u64),
+            painted: self.painted,
+            summary,
+            per_frame,
+            options: self.options.clone(),
+        }
+    }
+}
+
+/// Measures a stylized sequence.
+///
+/// `output` holds the stylized frames (straight RGBA: in the exemplar's colors with alpha =
+/// the target mask, or opaque, composited over a background), `target_masks` the target mask
+/// of each frame as coverage (`0..=1`, thresholded at 0.5), all of one size. Returns every
+/// metric of the [module documentation](super), pooled over the sequence and per frame, with
+/// the exemplar's own values where a ratio needs them.
+///
+/// Errors: [`Error::InvalidParam`] for an empty output, a mask count different from the frame
+/// count, frames or masks of different sizes, an empty exemplar, or an invalid option.
+pub fn evaluate(
+    output: &[Plane<Rgba>],
+    exemplar: &Exemplar,
+    target_masks: &[Plane<f32>],
+    options: &EvalOptions,
+) -> Result<Report> {
+    options.validate()?;
+    let first = output.first().ok_or_else(|| Error::param("output", "0 frames", "at least one frame"))?;
+    let (w, h) = first.size();
+    check(
+        target_masks.len() == output.len(),
+        "target_masks",
+        format!("{} masks", target_masks.len()),
+        &format!("one mask per output frame ({})", output.len()),
+    )?;
+    for (i, (f, m)) in output.iter().zip(target_masks).enumerate() {
+        for (what, size) in [("output frame", f.size()), ("target mask", m.size())] {
+            check(
+                size == (w, h),
+                &format!("{} {}", what, i + 1),
+                format!("{}x{}", size.0, size.1),
+                &format!("{}x{} like output frame 1", w, h),
+            )?;
+        }
+    }
+    let reference = Reference::new(exemplar, options)?;
+    let painted = detect_painted(output, options.background, options.paint_threshold);
+    let mut evaluator = Evaluator::new(&reference, options, output.len(), painted)?;
+    timed("output measures", || evaluator.push(output, target_masks))?;
+    Ok(evaluator.report())
+}
