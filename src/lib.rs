@@ -13,7 +13,8 @@
 //! 3. [`exemplar`] loads, generates and imports style exemplars (`S^rgb`, `S^mask`);
 //! 4. [`synth`] runs the Fluidymation synthesis, frame by frame;
 //! 5. [`composite`] recolors and layers the results, [`output`] writes PNG frames and a GIF;
-//! 6. [`eval`] measures a stylized sequence.
+//! 6. [`eval`] measures a stylized sequence, [`quality`] runs the engine on generated targets
+//!    and measures it.
 #![warn(missing_docs)]
 
 pub mod anim;
@@ -25,6 +26,7 @@ pub mod guide;
 pub mod img;
 pub mod output;
 pub mod progress;
+pub mod quality;
 pub mod render;
 pub mod seq;
 pub mod synth;

@@ -43,6 +43,10 @@ enum Command {
     /// edge darkening, palette, temporal and incoherent change, motion); print a table or JSON,
     /// optionally draw a chart.
     Eval(cli::eval::Args),
+    /// Run every exemplar on generated targets (still, growing, shrinking, translating,
+    /// rotating, a thin limb, a long one) and the identity, and print one table of the
+    /// measures; optionally contact sheets and JSON.
+    Quality(Box<cli::quality::Args>),
     /// Manage style exemplars: list, show, generate and import.
     Exemplar(cli::exemplar::Args),
 }
@@ -61,6 +65,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => cli::bench::run(args, &ctx),
         Command::Synth(args) => cli::synth::run(args, &ctx),
         Command::Eval(args) => cli::eval::run(args, &ctx),
+        Command::Quality(args) => cli::quality::run(*args, &ctx),
         Command::Exemplar(args) => cli::exemplar::run(args, &ctx),
     };
     match result {

@@ -8,6 +8,7 @@ pub mod jobs;
 pub mod params;
 pub mod plan;
 pub mod progress;
+pub mod quality;
 pub mod render;
 pub mod synth;
 

@@ -1,5 +1,6 @@
 //! Progress bars on a terminal (nothing under `--quiet` or when stderr is not a terminal).
 
+use fluidymation::Progress;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
 
@@ -41,5 +42,18 @@ impl Bars {
         if let Some(b) = &self.bar {
             b.finish_and_clear();
         }
+    }
+}
+
+/// The library's progress as one bar: its length and position follow the reports, its
+/// message names the stage.
+impl Progress for Bars {
+    fn update(&self, stage: &str, done: usize, total: usize) -> bool {
+        if let Some(b) = &self.bar {
+            b.set_length(total as u64);
+            b.set_position(done as u64);
+            b.set_message(stage.to_string());
+        }
+        true
     }
 }

@@ -55,7 +55,7 @@ struct Panel {
     reference: Option<f32>,
 }
 
-fn escape(s: &str) -> String {
+pub(crate) fn escape(s: &str) -> String {
     s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
 }
 
@@ -300,6 +300,12 @@ fn rasterize_with(
     db: Arc<usvg::fontdb::Database>,
 ) -> std::result::Result<tiny_skia::Pixmap, String> {
     svg_pixmap(&plot_svg(report, options), db)
+}
+
+/// Rasterizes an SVG document drawn with the system's fonts (labels are left out, with a
+/// warning, on a machine without fonts).
+pub(crate) fn rasterize_svg(svg: &str) -> std::result::Result<tiny_skia::Pixmap, String> {
+    svg_pixmap(svg, font_db())
 }
 
 fn svg_pixmap(svg: &str, db: Arc<usvg::fontdb::Database>) -> std::result::Result<tiny_skia::Pixmap, String> {

@@ -1,0 +1,111 @@
+//! `fluidymation quality`: the quality suite — every exemplar on generated targets, one table.
+
+use super::Ctx;
+use super::params::{SynthFlags, set_threads};
+use super::progress::Bars;
+use anyhow::{Context, Result, bail};
+use fluidymation::img;
+use fluidymation::quality::{self, IDENTITY, SuiteOptions, TargetKind};
+use std::path::PathBuf;
+
+/// Arguments of `quality`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Exemplar (name or folder); repeat for several [default: every bundled exemplar].
+    #[arg(long, short = 'e', value_name = "NAME")]
+    pub exemplar: Vec<String>,
+    /// Target: identity (the exemplar's own masks), still, growing, shrinking, translating,
+    /// rotating, limb or long; repeat for several [default: all].
+    #[arg(long, value_name = "NAME")]
+    pub target: Vec<String>,
+    /// Size of the generated targets relative to 512x512; the exemplar, blur and border are
+    /// scaled alike, as `render --scale` does (the identity stays at full size).
+    #[arg(long, default_value_t = 1.0)]
+    pub scale: f32,
+    /// Frames of each generated target but the long one.
+    #[arg(long, default_value_t = 48)]
+    pub frames: usize,
+    /// Frames of the long target.
+    #[arg(long, default_value_t = 300)]
+    pub long_frames: usize,
+    /// The long target is also reported per window of this many frames.
+    #[arg(long, default_value_t = 50)]
+    pub window: usize,
+    /// Write a contact sheet per run (EXEMPLAR-TARGET.png) and the table (quality.txt) here.
+    #[arg(long, short = 'o', value_name = "DIR")]
+    pub output: Option<PathBuf>,
+    /// Also write the report as JSON.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+    /// Runs painted at the same time (each uses every thread for its own stages).
+    #[arg(long, default_value_t = 2)]
+    pub jobs: usize,
+    /// Worker threads [default: all cores]. The numbers do not depend on it.
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Extra directories to look for exemplars by name.
+    #[arg(long, value_name = "DIR")]
+    pub exemplar_dir: Vec<PathBuf>,
+    #[command(flatten)]
+    pub flags: SynthFlags,
+}
+
+/// Runs `quality`.
+pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
+    set_threads(args.threads)?;
+    if args.flags.target_scale.is_some() {
+        bail!("--target-scale is for `synth`; use --scale with `quality`");
+    }
+    let params = args.flags.params()?;
+    let defaults = SuiteOptions::default();
+    let (identity, targets) = if args.target.is_empty() {
+        (defaults.identity, defaults.targets.clone())
+    } else {
+        let targets = args
+            .target
+            .iter()
+            .filter(|t| t.as_str() != IDENTITY)
+            .map(|t| {
+                TargetKind::parse(t).with_context(|| {
+                    let names: Vec<&str> = TargetKind::ALL.iter().map(|k| k.name()).collect();
+                    format!("--target '{}': expected {} or one of {}", t, IDENTITY, names.join(", "))
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        (args.target.iter().any(|t| t == IDENTITY), targets)
+    };
+    let options = SuiteOptions {
+        exemplars: args.exemplar,
+        exemplar_dirs: args.exemplar_dir,
+        targets,
+        identity,
+        scale: args.scale,
+        frames: args.frames,
+        long_frames: args.long_frames,
+        window: args.window,
+        params,
+        sheets: args.output.clone(),
+        jobs: args.jobs,
+        ..defaults
+    };
+    options.validate()?;
+    let bars = Bars::new(ctx.quiet, 0);
+    let report = quality::run(&options, &bars);
+    bars.finish();
+    let report = report.context("the quality suite failed")?;
+    let table = report.to_string();
+    println!("{table}");
+    if let Some(dir) = &args.output {
+        let path = dir.join("quality.txt");
+        img::atomic_write(&path, |w| writeln!(w, "{table}"))?;
+    }
+    if let Some(path) = &args.json {
+        let text = serde_json::to_string_pretty(&report).context("could not serialize the report")?;
+        img::atomic_write(path, |w| w.write_all(text.as_bytes()))
+            .with_context(|| format!("could not write '{}'", path.display()))?;
+        if !ctx.quiet {
+            eprintln!("report written to '{}'", path.display());
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,86 @@
+//! The suite's table.
+
+use super::{Row, SuiteReport};
+use crate::eval::Summary;
+use std::fmt;
+
+fn num(v: Option<f32>, digits: usize) -> String {
+    match v {
+        Some(v) if v.is_finite() => format!("{v:.digits$}"),
+        _ => "–".to_string(),
+    }
+}
+
+const HEADER: [&str; 11] =
+    ["exemplar", "target", "frames", "IoU", "IoU α", "contrast", "rim", "palette", "t.change", "incoh.", "motion"];
+
+fn line(f: &mut fmt::Formatter<'_>, cells: &[String], notes: &str) -> fmt::Result {
+    write!(f, "{:<16} {:<13} {:>6}", cells[0], cells[1], cells[2])?;
+    for c in &cells[3..] {
+        write!(f, " {c:>8}")?;
+    }
+    writeln!(f, "  {notes}")
+}
+
+fn cells(exemplar: &str, target: &str, frames: usize, s: &Summary, alpha: Option<f32>) -> Vec<String> {
+    vec![
+        exemplar.to_string(),
+        target.to_string(),
+        frames.to_string(),
+        num(s.coverage_iou, 3),
+        num(alpha, 3),
+        num(s.contrast_ratio, 2),
+        num(s.edge_darkening_ratio, 2),
+        num(s.palette_distance_mean, 4),
+        num(s.temporal_change_ratio, 2),
+        num(s.incoherent_change_ratio, 2),
+        num(s.motion_agreement, 2),
+    ]
+}
+
+fn notes(r: &Row) -> String {
+    let mut n = Vec::new();
+    if let Some(id) = &r.identity {
+        n.push(format!("PSNR median {:.1} dB, min {:.1} (frame {})", id.psnr_median, id.psnr_min, id.psnr_min_frame));
+    }
+    if r.fitted {
+        n.push(format!("fitted to its thickness: σ {}, b {}", r.blur_sigma, r.border_width));
+    }
+    n.join("; ")
+}
+
+impl fmt::Display for SuiteReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "quality suite: targets {0}x{0} ({1} frames, long {2} in windows of {3}), engine seed {4}, {5:.0} s",
+            self.side, self.frames, self.long_frames, self.window, self.seed, self.seconds
+        )?;
+        writeln!(f, "coverage (IoU) {}; IoU α: of the engine's alpha", self.coverage)?;
+        writeln!(
+            f,
+            "contrast, rim (edge darkening), t.change (temporal change), incoh. (incoherent change): output / exemplar, \
+             1 = like the exemplar; palette: W1 distance, 0 = the exemplar's colors; motion: mean cosine with the target's motion"
+        )?;
+        writeln!(f)?;
+        line(f, &HEADER.map(String::from), "notes")?;
+        for r in &self.rows {
+            line(f, &cells(&r.exemplar, &r.target, r.frames, &r.summary, r.coverage_alpha), &notes(r))?;
+            for w in &r.windows {
+                let label = format!("  {}-{}", w.first, w.last);
+                let note = format!(
+                    "contrast {}, rim {} of the first window",
+                    num(w.contrast_vs_first, 2),
+                    num(w.rim_vs_first, 2)
+                );
+                line(f, &cells("", &label, w.last + 1 - w.first, &w.summary, None), &note)?;
+            }
+        }
+        if !self.sheets.is_empty() {
+            writeln!(f)?;
+            let dir = self.sheets[0].parent().map(|p| p.display().to_string()).unwrap_or_default();
+            write!(f, "{} contact sheets in {}", self.sheets.len(), dir)?;
+        }
+        Ok(())
+    }
+}
