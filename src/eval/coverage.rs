@@ -111,17 +111,16 @@ pub fn iou(a: &Mask, b: &Mask) -> f32 {
 pub fn coverage_iou(output: &[Plane<Rgba>], targets: &[Shape], painted: &Painted) -> Measure {
     let counts: Vec<(u64, u64)> =
         output.par_iter().zip(targets).map(|(f, t)| intersection_union(&painted_mask(f, painted), &t.mask)).collect();
-    let per_frame =
-        counts.iter().map(|&(i, u)| Some(if u == 0 { 1.0 } else { (i as f64 / u as f64) as f32 })).collect();
+    coverage_from_counts(&counts)
+}
+
+/// The coverage measure from each frame's intersection and union counts: per frame their
+/// ratio (1 when both masks are empty), pooled `Σ|A ∩ B| / Σ|A ∪ B|`; `samples` = `Σ|A ∪ B|`.
+pub(crate) fn coverage_from_counts(counts: &[(u64, u64)]) -> Measure {
+    let ratio = |i: u64, u: u64| if u == 0 { 1.0 } else { (i as f64 / u as f64) as f32 };
+    let per_frame = counts.iter().map(|&(i, u)| Some(ratio(i, u))).collect();
     let (si, su) = counts.iter().fold((0u64, 0u64), |(a, b), &(i, u)| (a + i, b + u));
-    let value = if counts.is_empty() {
-        None
-    } else if su == 0 {
-        Some(1.0)
-    } else {
-        Some((si as f64 / su as f64) as f32)
-    };
-    Measure { value, per_frame, samples: su }
+    Measure { value: (!counts.is_empty()).then(|| ratio(si, su)), per_frame, samples: su }
 }
 
 #[cfg(test)]

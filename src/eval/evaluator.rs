@@ -3,6 +3,7 @@
 
 use super::coherence::pair_residual;
 use super::contrast::local_contrast_mean;
+use super::coverage::coverage_from_counts;
 use super::flow::motion_pair_mean;
 use super::patches::frame_patch_mean;
 use super::temporal::frame_change_mean;
@@ -14,34 +15,20 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::exemplar::Exemplar;
-use crate::img::{self, Mask, Plane, Rgb, Rgba};
+use crate::img::{self, Blend, Mask, Plane, Rgb, Rgba};
 use rayon::prelude::*;
 use std::ops::Range;
 
-/// The exemplar as the synthesis sees it: every `step`-th frame, resized by `scale`.
-fn prepare_exemplar(exemplar: &Exemplar, step: usize, scale: f32) -> (Vec<Plane<Rgb>>, Vec<Plane<f32>>) {
-    let resize = |w: usize, h: usize| {
-        (((w as f32 * scale).round() as usize).max(1), ((h as f32 * scale).round() as usize).max(1))
-    };
-    let frames: Vec<Plane<Rgb>> = exemplar
-        .frames
+/// Every `step`-th plane, resized by `scale`: the exemplar as the synthesis sees it.
+fn resample<T: Blend>(planes: &[Plane<T>], step: usize, scale: f32) -> Vec<Plane<T>> {
+    planes
         .par_iter()
         .step_by(step)
-        .map(|f| {
-            let (w, h) = resize(f.width(), f.height());
-            img::resize_bilinear(f, w, h)
+        .map(|p| {
+            let size = |v: usize| ((v as f32 * scale).round() as usize).max(1);
+            img::resize_bilinear(p, size(p.width()), size(p.height()))
         })
-        .collect();
-    let masks: Vec<Plane<f32>> = exemplar
-        .masks
-        .par_iter()
-        .step_by(step)
-        .map(|m| {
-            let (w, h) = resize(m.width(), m.height());
-            img::resize_bilinear(m, w, h)
-        })
-        .collect();
-    (frames, masks)
+        .collect()
 }
 
 /// The exemplar's side of an evaluation, measured once: its frames and masks as the synthesis
@@ -78,7 +65,7 @@ impl Reference {
         let step = options.exemplar_step.unwrap_or(exemplar.meta.speed).max(1);
         let scale = options.exemplar_scale.unwrap_or(exemplar.meta.scale);
         let scale = if scale.is_finite() && scale > 0.0 { scale } else { 1.0 };
-        let (frames, masks) = prepare_exemplar(exemplar, step, scale);
+        let (frames, masks) = (resample(&exemplar.frames, step, scale), resample(&exemplar.masks, step, scale));
         let shapes = timed("exemplar distance fields", || Shape::sequence(&masks));
         let regions: Vec<Mask> = shapes.par_iter().map(|s| s.interior(options.interior_margin)).collect();
         let lumas: Vec<Plane<f32>> = frames.par_iter().map(luma_plane).collect();
@@ -313,14 +300,7 @@ impl<'a> Evaluator<'a> {
             samples: frames.iter().map(|t| t.coherence.1).sum(),
             ..Measure::from_frame_values(frames.iter().map(|t| t.coherence.0).collect())
         };
-        let (si, su) = frames.iter().fold((0u64, 0u64), |(a, b), t| (a + t.coverage.0, b + t.coverage.1));
-        let coverage = if frames.is_empty() {
-            None
-        } else if su == 0 {
-            Some(1.0)
-        } else {
-            Some((si as f64 / su as f64) as f32)
-        };
+        let coverage = coverage_from_counts(&frames.iter().map(|t| t.coverage).collect::<Vec<_>>());
         let mut hist = ColorHistogram::new();
         for t in frames {
             hist.merge(&t.hist);
@@ -329,27 +309,24 @@ impl<'a> Evaluator<'a> {
         let per_frame = frames
             .par_iter()
             .enumerate()
-            .map(|(k, t)| {
-                let (i, u) = t.coverage;
-                FrameStats {
-                    frame: range.start + k + 1,
-                    coverage_iou: Some(if u == 0 { 1.0 } else { (i as f64 / u as f64) as f32 }),
-                    local_contrast: t.contrast.value(),
-                    contrast_ratio: ratio(t.contrast.value(), r.contrast.value),
-                    palette_distance: t.hist.wasserstein(&r.hist),
-                    patch_nn_distance: t.patches.value(),
-                    temporal_change: t.temporal.value(),
-                    temporal_change_ratio: ratio(t.temporal.value(), r.temporal.value),
-                    motion_agreement: t.motion.value(),
-                    edge_darkening: t.rim,
-                    edge_darkening_ratio: ratio(t.rim, r.rim.value),
-                    incoherent_change: t.coherence.0,
-                    incoherent_change_ratio: ratio(t.coherence.0, r.coherence.value),
-                }
+            .map(|(k, t)| FrameStats {
+                frame: range.start + k + 1,
+                coverage_iou: coverage.per_frame[k],
+                local_contrast: t.contrast.value(),
+                contrast_ratio: ratio(t.contrast.value(), r.contrast.value),
+                palette_distance: t.hist.wasserstein(&r.hist),
+                patch_nn_distance: t.patches.value(),
+                temporal_change: t.temporal.value(),
+                temporal_change_ratio: ratio(t.temporal.value(), r.temporal.value),
+                motion_agreement: t.motion.value(),
+                edge_darkening: t.rim,
+                edge_darkening_ratio: ratio(t.rim, r.rim.value),
+                incoherent_change: t.coherence.0,
+                incoherent_change_ratio: ratio(t.coherence.0, r.coherence.value),
             })
             .collect();
         let summary = Summary {
-            coverage_iou: coverage,
+            coverage_iou: coverage.value,
             local_contrast: contrast.value,
             contrast_ratio: ratio(contrast.value, r.contrast.value),
             palette_distance: palette,
