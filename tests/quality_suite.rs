@@ -24,6 +24,21 @@ impl Painter for Flat {
     }
 }
 
+/// Paints every target flat with a darker rim: the pixels touching the outside (the rim band
+/// of the suite at a quarter of the size) darker by 0.2.
+struct Rimmed;
+
+impl Painter for Rimmed {
+    fn paint(&self, run: &RunSpec<'_>, emit: &mut dyn FnMut(PaintedFrame) -> Result<()>) -> Result<()> {
+        for k in 0..run.frames {
+            let shape = eval::Shape::from_coverage(&(run.coverage)(k));
+            let rgb = shape.sdf.map(|d| if d + 0.5 <= 1.0 { [0.4, 0.4, 0.4] } else { [0.6, 0.6, 0.6] });
+            emit(PaintedFrame { rgb, mask: shape.mask })?;
+        }
+        Ok(())
+    }
+}
+
 /// Paints the identity with the exemplar's own frames (and other targets flat).
 struct Echo;
 
@@ -111,6 +126,7 @@ fn stand_ins_score_what_they_are() {
     let w: Vec<(usize, usize)> = long.windows.iter().map(|w| (w.first, w.last)).collect();
     assert_eq!(w, [(1, 5), (6, 10), (11, 12)]);
     assert_eq!(long.windows[0].contrast_vs_first, None, "0 / 0 has no ratio");
+    assert!(long.windows.iter().all(|w| w.rim_vs_first.is_none()), "no rim in the first window to keep");
     assert!(report.rows.iter().filter(|r| r.target != "long").all(|r| r.windows.is_empty()));
 
     // A contact sheet per run, and the table names every row.
@@ -129,6 +145,20 @@ fn stand_ins_score_what_they_are() {
     };
     assert_eq!(untimed(&back), untimed(&report));
     let _ = std::fs::remove_dir_all(&sheets);
+}
+
+#[test]
+fn a_rim_kept_over_the_long_target_scores_one_per_window() {
+    let opts = SuiteOptions { identity: false, long_frames: 15, ..small(vec![TargetKind::Long]) };
+    let report = quality::run_with(&opts, &Rimmed, &NoProgress).unwrap();
+    let long = &report.rows[0];
+    // The luma of 0.6 inside and 0.4 on the edge: a rim of 0.2 in every frame and window.
+    assert!((long.summary.edge_darkening.unwrap() - 0.2).abs() < 1e-5, "{:?}", long.summary.edge_darkening);
+    assert_eq!(long.windows.len(), 3);
+    for w in &long.windows {
+        assert!((w.rim_vs_first.unwrap() - 1.0).abs() < 1e-5, "{:?}", w.rim_vs_first);
+        assert_eq!(w.summary.rim_frames, 5);
+    }
 }
 
 #[test]

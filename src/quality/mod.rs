@@ -74,6 +74,10 @@ pub const DEFAULT_SIDE: usize = 512;
 /// The name of the identity run (the exemplar's own masks as the target).
 pub const IDENTITY: &str = "identity";
 
+/// The least edge-darkening ratio (to the exemplar's) of the long target's first window for
+/// the other windows' rims to be compared with it.
+pub const MIN_RIM_TO_KEEP: f32 = 0.1;
+
 /// PSNR reported for a frame identical to the exemplar's, dB.
 pub const PSNR_CAP: f32 = 100.0;
 
@@ -197,7 +201,9 @@ pub struct Window {
     pub summary: Summary,
     /// This window's local contrast ÷ the first window's.
     pub contrast_vs_first: Option<f32>,
-    /// This window's edge darkening ÷ the first window's.
+    /// This window's edge darkening ÷ the first window's; `None` when the first window has
+    /// less than [`MIN_RIM_TO_KEEP`] of the exemplar's (a ratio to a rim that is not there
+    /// says nothing).
     pub rim_vs_first: Option<f32>,
 }
 
@@ -644,9 +650,10 @@ fn run_job(
         while s < job.frames {
             let e = (s + options.window).min(job.frames);
             let (summary, _) = evaluator.summary(s..e);
-            let (c0, r0) = out.first().map_or((summary.local_contrast, summary.edge_darkening), |w| {
-                (w.summary.local_contrast, w.summary.edge_darkening)
-            });
+            let first = out.first().map_or(&summary, |w| &w.summary);
+            let (c0, r0) = (first.local_contrast, first.edge_darkening);
+            // Without a rim in the first window there is nothing to keep.
+            let r0 = r0.filter(|_| first.edge_darkening_ratio.is_some_and(|r| r >= MIN_RIM_TO_KEEP));
             out.push(Window {
                 first: s + 1,
                 last: e,
