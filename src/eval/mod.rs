@@ -46,7 +46,7 @@ mod coherence;
 mod contrast;
 mod coverage;
 mod evaluator;
-mod farneback;
+pub mod farneback;
 mod flow;
 mod palette;
 mod patches;
