@@ -209,24 +209,11 @@ impl<'a> Evaluator<'a> {
     /// coverage `masks[i]`, all of the size of the first frame ever pushed. Frames of a batch
     /// are measured in parallel.
     pub fn push(&mut self, output: &[Plane<Rgba>], masks: &[Plane<f32>]) -> Result<()> {
-        check(
-            masks.len() == output.len(),
-            "target_masks",
-            format!("{} masks", masks.len()),
-            &format!("one mask per output frame ({})", output.len()),
-        )?;
-        let Some(first) = output.first() else { return Ok(()) };
-        let (w, h) = *self.size.get_or_insert(first.size());
-        for (i, (f, m)) in output.iter().zip(masks).enumerate() {
-            for (what, size) in [("output frame", f.size()), ("target mask", m.size())] {
-                check(
-                    size == (w, h),
-                    &format!("{} {}", what, self.frames.len() + i + 1),
-                    format!("{}x{}", size.0, size.1),
-                    &format!("{}x{} like output frame 1", w, h),
-                )?;
-            }
-        }
+        let Some(first) = output.first() else {
+            return check_batch(output, masks, (0, 0), 0);
+        };
+        let size = *self.size.get_or_insert(first.size());
+        check_batch(output, masks, size, self.frames.len())?;
         let o = &self.options;
         let rgb = composite_output(output, &self.painted, self.reference.paper);
         let shapes = Shape::sequence(masks);
@@ -366,6 +353,29 @@ impl<'a> Evaluator<'a> {
     }
 }
 
+/// Checks that there is a mask per frame and that frames and masks are all `size`; `offset`
+/// is the number of frames before these (for the frame numbers in the errors).
+fn check_batch(output: &[Plane<Rgba>], masks: &[Plane<f32>], size: (usize, usize), offset: usize) -> Result<()> {
+    check(
+        masks.len() == output.len(),
+        "target_masks",
+        format!("{} masks", masks.len()),
+        &format!("one mask per output frame ({})", output.len()),
+    )?;
+    let (w, h) = size;
+    for (i, (f, m)) in output.iter().zip(masks).enumerate() {
+        for (what, found) in [("output frame", f.size()), ("target mask", m.size())] {
+            check(
+                found == size,
+                &format!("{} {}", what, offset + i + 1),
+                format!("{}x{}", found.0, found.1),
+                &format!("{}x{} like output frame 1", w, h),
+            )?;
+        }
+    }
+    Ok(())
+}
+
 /// Measures a stylized sequence.
 ///
 /// `output` holds the stylized frames (straight RGBA: in the exemplar's colors with alpha =
@@ -384,23 +394,7 @@ pub fn evaluate(
 ) -> Result<Report> {
     options.validate()?;
     let first = output.first().ok_or_else(|| Error::param("output", "0 frames", "at least one frame"))?;
-    let (w, h) = first.size();
-    check(
-        target_masks.len() == output.len(),
-        "target_masks",
-        format!("{} masks", target_masks.len()),
-        &format!("one mask per output frame ({})", output.len()),
-    )?;
-    for (i, (f, m)) in output.iter().zip(target_masks).enumerate() {
-        for (what, size) in [("output frame", f.size()), ("target mask", m.size())] {
-            check(
-                size == (w, h),
-                &format!("{} {}", what, i + 1),
-                format!("{}x{}", size.0, size.1),
-                &format!("{}x{} like output frame 1", w, h),
-            )?;
-        }
-    }
+    check_batch(output, target_masks, first.size(), 0)?;
     let reference = Reference::new(exemplar, options)?;
     let painted = detect_painted(output, options.background, options.paint_threshold);
     let mut evaluator = Evaluator::new(&reference, options, output.len(), painted)?;
