@@ -622,7 +622,9 @@ fn start_layer(
         |k| Ok(target_fill(&anim.render(region, first + k)?, strokes).map(|c| c[3])),
         style.params.guide(),
     )?;
-    Ok((Synthesizer::new(style.source.clone(), style.params.clone())?, stream))
+    let mut synth = Synthesizer::new(style.source.clone(), style.params.clone())?;
+    synth.set_target_extent(stream.extent_scale());
+    Ok((synth, stream))
 }
 
 /// Synthesizes the next frame (animation frame `frame`) of a layer.

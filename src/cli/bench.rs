@@ -56,6 +56,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     let stream = GuideStream::new(args.frames, |k| Ok(workload::horse_mask(w, h, k)), params.guide())?;
     let backward = t.elapsed();
     let mut synth = Synthesizer::new(source, params)?;
+    synth.set_target_extent(stream.extent_scale());
     let (mut guides_t, mut synth_t) = (Duration::ZERO, Duration::ZERO);
     let mut levels: Vec<Duration> = Vec::new();
     let mut st = StageTimes::default();

@@ -22,7 +22,7 @@ pub struct SynthFlags {
     /// Weight of the border channel w_df (w^bound) [default: 5].
     #[arg(long, value_name = "W")]
     pub dist_weight: Option<f32>,
-    /// Weight of the motion-extent channels w_ext [default: 0.015].
+    /// Weight of the motion-extent channels w_ext [default: 0.005].
     #[arg(long, value_name = "W")]
     pub flow_weight: Option<f32>,
     /// Weight of the temporal guide w_prev (w^temp) [default: 4].
@@ -31,13 +31,17 @@ pub struct SynthFlags {
     /// Uniformity weight λ [default: 4].
     #[arg(long, value_name = "L")]
     pub lambda: Option<f32>,
+    /// Coherence factor κ: a random PatchMatch candidate must be κ times better than the
+    /// current match (1 = plain PatchMatch) [default: 2].
+    #[arg(long, value_name = "K")]
+    pub coherence: Option<f32>,
     /// Temporal radius r of the occurrence boxes, frames [default: 5].
     #[arg(long, value_name = "R")]
     pub occ_radius: Option<usize>,
     /// Border width b, exemplar pixels [default: the exemplar's recommendation].
     #[arg(long, value_name = "PX")]
     pub border_width: Option<f32>,
-    /// σ of the spatial mask blur, pixels [default: 8].
+    /// σ of the spatial mask blur, pixels (the thesis uses 8) [default: 0].
     #[arg(long, value_name = "PX")]
     pub blur_sigma: Option<f32>,
     /// σ of the temporal distance-field blur, frames [default: 2].
@@ -71,6 +75,22 @@ pub struct SynthFlags {
     /// only a few pixels thick; giving --blur-sigma or --border-width also turns this off).
     #[arg(long)]
     pub no_thin_fit: bool,
+    /// Switch one part of the method off, to see what it does (repeatable): direction-rule
+    /// (patches unrotated), time-shift (no SHIFTNNF), segments (interior and border patches
+    /// mixed), advection (no residual advection or rim re-anchoring), extent-normalization
+    /// (raw target extents, as in the paper).
+    #[arg(long, value_name = "PART", value_enum)]
+    pub without: Vec<Part>,
+}
+
+/// The parts of the method `--without` switches off.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Part {
+    DirectionRule,
+    TimeShift,
+    Segments,
+    Advection,
+    ExtentNormalization,
 }
 
 impl SynthFlags {
@@ -93,6 +113,9 @@ impl SynthFlags {
         }
         if let Some(v) = self.lambda {
             b = b.lambda(v);
+        }
+        if let Some(v) = self.coherence {
+            b = b.coherence(v);
         }
         if let Some(v) = self.occ_radius {
             b = b.occ_radius(v);
@@ -128,6 +151,15 @@ impl SynthFlags {
             }
             b = b.prev_bounds(v[1], v[0]);
         }
+        for part in &self.without {
+            b = match part {
+                Part::DirectionRule => b.direction_rule(false),
+                Part::TimeShift => b.time_shift(false),
+                Part::Segments => b.segments(false),
+                Part::Advection => b.advect(false),
+                Part::ExtentNormalization => b.ext_normalize(false),
+            };
+        }
         Ok(b.build()?)
     }
 }
@@ -147,6 +179,7 @@ impl SynthFlags {
         push("flow-weight", self.flow_weight.map(|v| v.to_string()));
         push("prev-weight", self.prev_weight.map(|v| v.to_string()));
         push("lambda", self.lambda.map(|v| v.to_string()));
+        push("coherence", self.coherence.map(|v| v.to_string()));
         push("occ-radius", self.occ_radius.map(|v| v.to_string()));
         push("border-width", self.border_width.map(|v| v.to_string()));
         push("blur-sigma", self.blur_sigma.map(|v| v.to_string()));
@@ -163,6 +196,10 @@ impl SynthFlags {
         }
         if self.no_thin_fit {
             out.push("--no-thin-fit".into());
+        }
+        for part in &self.without {
+            out.push("--without".into());
+            out.push(clap::ValueEnum::to_possible_value(part).map(|v| v.get_name().to_string()).unwrap_or_default());
         }
         out
     }

@@ -68,6 +68,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     let masks_anim = &anim;
     let stream = GuideStream::new(anim.frames, |i| Ok(masks_anim.render(0, i)?.coverage()), params.guide())
         .context("could not compute the target guides")?;
+    synth.set_target_extent(stream.extent_scale());
     let start = std::time::Instant::now();
     let mut written = 0;
     for (k, g) in stream.enumerate() {

@@ -20,9 +20,9 @@
 //! 5. `b` is the larger of the two `k₀`, at least 2 px and at most half the deepest valid
 //!    distance (near-edge = that first half).
 //!
-//! The distances are measured on the raw masks; the engine pre-processes masks (blur σ 8,
-//! threshold below 0.5) which moves the edge outwards by a pixel or two, well within the
-//! estimate's precision.
+//! The distances are measured on the raw masks, as the engine's guides are by default (no
+//! blur; with `--blur-sigma 8`, the thesis's value, the edge moves outwards by a pixel or two,
+//! well within the estimate's precision).
 
 use super::Exemplar;
 

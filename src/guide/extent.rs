@@ -31,6 +31,69 @@ pub(crate) fn accumulate(acc: &mut Plane<Vec2>, mask: &FrameMask, flow: &Crop<Ve
     });
 }
 
+/// A histogram of motion extents (pixels, in steps of 1/4 up to 16 384) for their quantiles:
+/// how far the material of a whole sequence moves, in the bounded memory of a stream.
+#[derive(Clone, Debug)]
+pub struct ExtentHistogram {
+    bins: Vec<u64>,
+    count: u64,
+}
+
+impl Default for ExtentHistogram {
+    fn default() -> Self {
+        ExtentHistogram { bins: vec![0; Self::BINS], count: 0 }
+    }
+}
+
+impl ExtentHistogram {
+    const STEP: f32 = 0.25;
+    const BINS: usize = 65_536;
+
+    /// Counts one extent.
+    pub fn add(&mut self, v: f32) {
+        if v.is_finite() {
+            let k = ((v.max(0.0) / Self::STEP) as usize).min(Self::BINS - 1);
+            self.bins[k] += 1;
+            self.count += 1;
+        }
+    }
+
+    /// The q-quantile (`0..=1`), to the bin's upper edge; 0 without values.
+    pub fn quantile(&self, q: f32) -> f32 {
+        if self.count == 0 {
+            return 0.0;
+        }
+        let want = ((q.clamp(0.0, 1.0) as f64 * self.count as f64).ceil() as u64).max(1);
+        let mut seen = 0;
+        for (k, &n) in self.bins.iter().enumerate() {
+            seen += n;
+            if seen >= want {
+                return if k == 0 && self.bins[0] == seen { 0.0 } else { (k + 1) as f32 * Self::STEP };
+            }
+        }
+        Self::BINS as f32 * Self::STEP
+    }
+}
+
+/// The extent scale of a sequence: the 95th percentile of `ext−` over the mask pixels of all its
+/// frames — how far most of its material moves (0 for a sequence that does not move). The
+/// synthesis compares the target's extents with the exemplar's after bringing this scale of
+/// the target down to the exemplar's ([`crate::synth::Synthesizer::set_target_extent`]).
+pub fn extent_scale(guides: &[FrameGuides]) -> f32 {
+    let mut h = ExtentHistogram::default();
+    for g in guides {
+        for (&v, &m) in g.ext_neg.data().iter().zip(g.mask.data()) {
+            if m {
+                h.add(v);
+            }
+        }
+    }
+    h.quantile(EXTENT_QUANTILE)
+}
+
+/// The quantile of [`extent_scale`].
+pub const EXTENT_QUANTILE: f32 = 0.95;
+
 /// `‖acc‖` per pixel.
 pub(crate) fn norms(acc: &Plane<Vec2>) -> Plane<f32> {
     let (w, h) = acc.size();

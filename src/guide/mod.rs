@@ -47,7 +47,7 @@ pub mod preview;
 pub mod sdf;
 mod stream;
 
-pub use extent::{compute_sequence, compute_sequence_with_flow};
+pub use extent::{ExtentHistogram, compute_sequence, compute_sequence_with_flow, extent_scale};
 pub use preprocess::preprocess_mask;
 pub use sdf::sdf;
 pub use stream::{GuideStream, GuideStreamBuilder};
@@ -60,7 +60,13 @@ use glam::Vec2;
 #[derive(Clone, Debug, PartialEq)]
 pub struct GuideParams {
     /// σ of the Gaussian blur applied to masks before thresholding (`--blur-sigma`), pixels.
-    /// Default: 8 (thesis).
+    /// Default: 0 (no blur; the thesis uses 8). The thesis blurs hand-drawn bitmap masks to
+    /// smooth them; our masks are anti-aliased rasterizations, already smooth, and the blur
+    /// rounds corners, fills concavities and moves the edge the distance guide measures from,
+    /// so the exemplar's dark rim lands off the target's edge. Measured with `quality` (blue-bloom,
+    /// ink-rims, yellow-granules × growing, translating, 24 frames, 512²): edge darkening
+    /// 0.28–0.78 with σ = 8, 0.45–0.80 with σ = 1, 0.52–0.86 with σ = 0; coverage IoU of the
+    /// alpha 0.92 → 0.99; incoherent change 1.12–1.63 → 1.01–1.55.
     pub blur_sigma: f32,
     /// Threshold applied to the blurred mask; below 0.5 so the mask takes in a little paper.
     /// Default: 0.3.
@@ -83,7 +89,7 @@ pub struct GuideParams {
 impl Default for GuideParams {
     fn default() -> Self {
         GuideParams {
-            blur_sigma: 8.0,
+            blur_sigma: 0.0,
             mask_threshold: 0.3,
             time_blur_sigma: 2.0,
             flow_time_radius: 3,
@@ -113,7 +119,7 @@ impl GuideParams {
     /// A stable text key of every parameter, for caches of computed guides.
     pub fn fingerprint(&self) -> String {
         format!(
-            "guides-v1 blur={} thr={} tblur={} frad={} tan={} tol={}",
+            "guides-v2 blur={} thr={} tblur={} frad={} tan={} tol={}",
             self.blur_sigma,
             self.mask_threshold,
             self.time_blur_sigma,

@@ -1,6 +1,8 @@
 //! Mask pre-processing (thesis §4.1, Fig. 4.1): a Gaussian blur of the coverage with
 //! σ = `blur_sigma`, then a threshold below 0.5, so masks have smooth edges and take in a little
-//! of the unpainted paper around the paint.
+//! of the unpainted paper around the paint. The covered pixels themselves (coverage ≥ ½) always
+//! stay in the mask: the blur alone erases parts narrower than about σ (a dot, the tip of a
+//! limb, the first drop of an exemplar), and what the animation covers must be painted.
 //!
 //! The blur only runs inside the bounding box of the non-zero coverage grown by the kernel
 //! radius; the result is bit-for-bit the same as [`crate::img::gaussian_blur`] on the whole
@@ -12,7 +14,8 @@ use crate::img::{Mask, Plane, gaussian_kernel};
 use rayon::prelude::*;
 
 /// Blurs `coverage` (σ = `params.blur_sigma`, edges clamped) and keeps the pixels whose blurred
-/// value is at least `params.mask_threshold`: the pre-processed mask `I^mask`.
+/// value is at least `params.mask_threshold`, and the covered pixels (coverage ≥ ½): the
+/// pre-processed mask `I^mask`.
 pub fn preprocess_mask(coverage: &Plane<f32>, params: &GuideParams) -> Mask {
     let (w, h) = coverage.size();
     blurred_threshold(coverage, params.blur_sigma, params.mask_threshold).to_full(w, h)
@@ -77,8 +80,9 @@ fn blurred_threshold(cov: &Plane<f32>, sigma: f32, threshold: f32) -> Crop<bool>
                     *o += v * kv;
                 }
             }
-            for (m, &v) in mrow.iter_mut().zip(acc.iter()) {
-                *m = v >= threshold;
+            let raw = &cov.row(y)[out.x0..out.x1];
+            for ((m, &v), &c) in mrow.iter_mut().zip(acc.iter()).zip(raw) {
+                *m = v >= threshold || c >= 0.5;
             }
         },
     );
@@ -98,7 +102,8 @@ mod tests {
         });
         for (sigma, thr) in [(8.0, 0.3), (2.5, 0.5), (0.0, 0.3), (3.0, 0.05)] {
             let p = GuideParams { blur_sigma: sigma, mask_threshold: thr, ..Default::default() };
-            let expected = gaussian_blur(&cov, sigma).threshold(thr);
+            let blurred = gaussian_blur(&cov, sigma).threshold(thr);
+            let expected = Plane::from_fn(90, 70, |x, y| blurred.get(x, y) || cov.get(x, y) >= 0.5);
             assert_eq!(preprocess_mask(&cov, &p), expected, "sigma {sigma} threshold {thr}");
         }
         let empty = Plane::new(10, 10);
@@ -106,9 +111,18 @@ mod tests {
     }
 
     #[test]
+    fn small_parts_survive_the_blur() {
+        // A 3-pixel dot vanishes in a σ = 8 blur (its peak is far below 0.3), but stays painted.
+        let cov = Plane::from_fn(40, 40, |x, y| if (19..22).contains(&x) && (19..22).contains(&y) { 1.0 } else { 0.0 });
+        let p = GuideParams { blur_sigma: 8.0, ..GuideParams::default() };
+        assert!(gaussian_blur(&cov, p.blur_sigma).threshold(p.mask_threshold).count() == 0);
+        assert_eq!(preprocess_mask(&cov, &p).count(), 9);
+    }
+
+    #[test]
     fn threshold_below_half_grows_the_mask() {
         let cov = Plane::from_fn(60, 60, |x, y| if (20..40).contains(&x) && (20..40).contains(&y) { 1.0 } else { 0.0 });
-        let m = preprocess_mask(&cov, &GuideParams::default());
+        let m = preprocess_mask(&cov, &GuideParams { blur_sigma: 8.0, ..GuideParams::default() });
         assert!(m.count() > 400);
         assert!(m.get(19, 30) && !m.get(30, 30 - 20));
     }

@@ -24,7 +24,7 @@
 //! [`super::compute_sequence`]'s.
 
 use super::crop::{Crop, FrameMask, PackedMask};
-use super::extent::{accumulate, assemble, masked_user_flow, norms};
+use super::extent::{EXTENT_QUANTILE, ExtentHistogram, accumulate, assemble, masked_user_flow, norms};
 use super::flow::{FlowMachine, MaskProvider, check_size};
 use super::preprocess::preprocess_frame;
 use super::{FrameGuides, GuideParams};
@@ -107,6 +107,7 @@ impl<'p> GuideStreamBuilder<'p> {
             acc_pos: Plane::new(0, 0),
             prev_flow: None,
             failed: false,
+            extent_scale: 0.0,
         };
         if n == 0 {
             return Ok(s);
@@ -116,6 +117,7 @@ impl<'p> GuideStreamBuilder<'p> {
         let progress = self.progress;
         let mut done = 0;
         let mut acc = Plane::new(0, 0);
+        let mut extents = ExtentHistogram::default();
         let seg_len = s.seg_len;
         let checkpoints = &mut s.checkpoints;
         let flow = &mut s.flow;
@@ -125,6 +127,9 @@ impl<'p> GuideStreamBuilder<'p> {
             }
             if j + 1 < n {
                 accumulate(&mut acc, mask, f);
+            }
+            for a in mask.gather_plane(&acc) {
+                extents.add(a.length());
             }
             if j % seg_len == 0 && j > 0 {
                 checkpoints[j / seg_len - 1] = Some(mask.gather_plane(&acc));
@@ -143,6 +148,7 @@ impl<'p> GuideStreamBuilder<'p> {
             .map(|(i, m)| m.ok_or_else(|| Error::param("frame", i, "a frame read by the backward pass")))
             .collect::<Result<_>>()?;
         s.acc_pos = Plane::new(s.size.0, s.size.1);
+        s.extent_scale = extents.quantile(EXTENT_QUANTILE);
         Ok(s)
     }
 }
@@ -181,6 +187,7 @@ pub struct GuideStream {
     acc_pos: Plane<Vec2>,
     prev_flow: Option<Crop<Vec2>>,
     failed: bool,
+    extent_scale: f32,
 }
 
 /// One segment's final flows and `ext−` at the mask pixels of each frame.
@@ -213,6 +220,12 @@ impl GuideStream {
     /// Frame size `(width, height)`.
     pub fn size(&self) -> (usize, usize) {
         self.size
+    }
+
+    /// The sequence's extent scale, [`super::extent_scale`] of all its frames (from the
+    /// backward pass), for [`crate::synth::Synthesizer::set_target_extent`].
+    pub fn extent_scale(&self) -> f32 {
+        self.extent_scale
     }
 
     /// Bytes held between frames by the stored masks and the checkpoints not used yet (not

@@ -325,6 +325,7 @@ impl Painter for Engine {
         let source = self.source(run)?;
         let stream = GuideStream::new(run.frames, |k| Ok((run.coverage)(k)), run.params.guide())?;
         let mut synth = Synthesizer::new(source, run.params.clone())?;
+        synth.set_target_extent(stream.extent_scale());
         for g in stream {
             let out = synth.step(&g?)?;
             emit(PaintedFrame { rgb: out.rgb, mask: out.mask })?;

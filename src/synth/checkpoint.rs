@@ -1,5 +1,5 @@
 //! Saving and restoring the state a synthesizer carries between frames (the previous frame's
-//! field, its `T^ext+` and masks), so an interrupted render can resume and give the same
+//! field, its `T^ext+`, `T^flow` and masks, and the extent factor k), so an interrupted render can resume and give the same
 //! result as an uninterrupted one. Ω needs no saving: it is recomputed for every frame.
 
 use super::nnf::{Match, Nnf};
@@ -7,7 +7,7 @@ use super::{PrevState, Synthesizer};
 use crate::error::{Error, Result};
 use std::path::Path;
 
-const MAGIC: &[u8; 8] = b"FMSYNTH3";
+const MAGIC: &[u8; 8] = b"FMSYNTH4";
 
 struct Writer(Vec<u8>);
 
@@ -68,6 +68,8 @@ impl Synthesizer {
         let (sw, sh) = self.size.unwrap_or((0, 0));
         w.u64(sw as u64);
         w.u64(sh as u64);
+        // k of the extent normalization, fixed at the first frame with paint (NaN: not yet).
+        w.f32(self.ext_factor.unwrap_or(f32::NAN));
         match &self.prev {
             None => w.u64(0),
             Some(p) => {
@@ -76,14 +78,14 @@ impl Synthesizer {
                 w.u64(p.origin.1 as u64);
                 w.u64(p.nnf0.w as u64);
                 w.u64(p.nnf0.h as u64);
-                // Sparse: a bit per pixel, then the matches (and T^ext+) of the set bits only.
+                // Sparse: a bit per pixel, then the matches (and T^ext+, T^flow) of the set bits only.
                 let ok: Vec<bool> = p.nnf0.data.iter().map(|m| m.ok).collect();
                 w.bytes(&pack_bits(&ok));
-                for (m, &e) in p.nnf0.data.iter().zip(&p.ext_pos) {
+                for ((m, &e), f) in p.nnf0.data.iter().zip(&p.ext_pos).zip(&p.flow) {
                     if !m.ok {
                         continue;
                     }
-                    for v in [m.x, m.y, m.c, m.s, m.err, e] {
+                    for v in [m.x, m.y, m.c, m.s, m.err, e, f.x, f.y] {
                         w.f32(v);
                     }
                     w.0.extend_from_slice(&m.i.to_le_bytes());
@@ -120,6 +122,10 @@ impl Synthesizer {
         let frame = r.u64().ok_or_else(trunc)? as usize;
         let sw = r.len(limit).ok_or_else(trunc)?;
         let sh = r.len(limit).ok_or_else(trunc)?;
+        let ext_factor = r.f32().ok_or_else(trunc)?;
+        if !(ext_factor.is_nan() || (ext_factor > 0.0 && ext_factor <= 1.0)) {
+            return Err(bad("the extent factor is not in (0, 1]"));
+        }
         let prev = match r.u64().ok_or_else(trunc)? {
             0 => None,
             _ => {
@@ -131,11 +137,12 @@ impl Synthesizer {
                 let ok = unpack_bits(r.take(n).ok_or_else(trunc)?, w * h).ok_or_else(|| bad("inconsistent sizes"))?;
                 let mut nnf = Nnf::new(w, h);
                 let mut ext_pos = vec![0.0f32; w * h];
-                for ((m, e), &ok) in nnf.data.iter_mut().zip(ext_pos.iter_mut()).zip(&ok) {
+                let mut flow = vec![glam::Vec2::ZERO; w * h];
+                for (((m, e), f), &ok) in nnf.data.iter_mut().zip(ext_pos.iter_mut()).zip(flow.iter_mut()).zip(&ok) {
                     if !ok {
                         continue;
                     }
-                    let mut v = [0.0f32; 6];
+                    let mut v = [0.0f32; 8];
                     for x in v.iter_mut() {
                         *x = r.f32().ok_or_else(trunc)?;
                     }
@@ -151,6 +158,10 @@ impl Synthesizer {
                         ok: true,
                     };
                     *e = v[5];
+                    *f = glam::Vec2::new(v[6], v[7]);
+                    if !(f.is_finite() && e.is_finite()) {
+                        return Err(bad("a motion value is not a number"));
+                    }
                     if m.i as usize >= self.source.frames() || !(m.x.is_finite() && m.y.is_finite()) {
                         return Err(bad("a match points outside the exemplar"));
                     }
@@ -163,7 +174,7 @@ impl Synthesizer {
                     masks
                         .push(unpack_bits(r.take(n).ok_or_else(trunc)?, len).ok_or_else(|| bad("inconsistent sizes"))?);
                 }
-                Some(PrevState { origin: (ox, oy), nnf0: nnf, ext_pos, masks })
+                Some(PrevState { origin: (ox, oy), nnf0: nnf, ext_pos, flow, masks })
             }
         };
         if r.pos != data.len() {
@@ -172,6 +183,7 @@ impl Synthesizer {
         self.frame = frame;
         self.size = (sw > 0).then_some((sw, sh));
         self.prev = prev;
+        self.ext_factor = (!ext_factor.is_nan()).then_some(ext_factor);
         Ok(())
     }
 }

@@ -48,7 +48,7 @@ use nnf::{Match, Nnf, level_count};
 use patchmatch::Ctx;
 use rayon::prelude::*;
 use rng::Rng;
-use source::{MARGIN, SourceLevel};
+use source::MARGIN;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use target::TargetLevel;
@@ -248,6 +248,12 @@ pub struct DebugViews {
     /// Ω* of the finest optimized level summed over the exemplar frames, divided by
     /// n²(2r+1) (≈ how many times each exemplar pixel was used).
     pub omega: Plane<f32>,
+    /// The final field itself, per target pixel: (i, x, y, θ) — exemplar frame, sub-pixel
+    /// center in full-resolution exemplar pixels, rotation in radians; NaN where there is no
+    /// match.
+    pub field: Plane<[f32; 4]>,
+    /// The previous frame's field shifted in time (SHIFTNNF), in the same form as `field`.
+    pub shifted: Plane<[f32; 4]>,
 }
 
 fn mean_err(nnf: &Nnf) -> f64 {
@@ -269,6 +275,8 @@ struct PrevState {
     nnf0: Nnf,
     /// `T^ext+` of the previous frame.
     ext_pos: Vec<f32>,
+    /// `T^flow` of the previous frame: the motion from it to this one.
+    flow: Vec<glam::Vec2>,
     /// The previous frame's masks per level.
     masks: Vec<Vec<bool>>,
 }
@@ -281,12 +289,51 @@ pub struct Synthesizer {
     prev: Option<PrevState>,
     size: Option<(usize, usize)>,
     debug: bool,
+    /// The target's extent scale, when the caller knows it ([`Synthesizer::set_target_extent`]).
+    target_extent: Option<f32>,
+    /// The factor applied to the target's extents, fixed at the first non-empty frame.
+    ext_factor: Option<f32>,
 }
 
 impl Synthesizer {
     /// A synthesizer for one target sequence (one layer).
     pub fn new(source: Source, params: Params) -> Result<Synthesizer> {
-        Ok(Synthesizer { params, source, frame: 0, prev: None, size: None, debug: false })
+        Ok(Synthesizer {
+            params,
+            source,
+            frame: 0,
+            prev: None,
+            size: None,
+            debug: false,
+            target_extent: None,
+            ext_factor: None,
+        })
+    }
+
+    /// Tells the synthesizer how far the target's material moves over the whole sequence: its
+    /// extent scale `E_T` ([`crate::guide::extent_scale`], or
+    /// [`crate::guide::GuideStream::extent_scale`] of the stream the frames come from). Call
+    /// it before the first frame.
+    ///
+    /// The target's extents are compared with the exemplar's after scaling them by
+    /// `k = min(1, E_S / E_T)`, `E_S` being the exemplar's scale: an animation whose material
+    /// travels four times as far as the paint in the exemplar then asks for the exemplar's
+    /// patches in the same proportions of little-moved and much-moved paint, instead of
+    /// asking all its interior for the few most-moved pixels of the exemplar (whose extents
+    /// are the only ones near its own, and whose overuse washes the texture out). The time
+    /// shift follows the scaled extents too, so the exemplar's life — wet bloom to settled
+    /// paint — is spread over the animation's motion; the motion it does not supply is
+    /// carried ([`ParamsBuilder::advect`]). Without this call, `E_T` is taken from the first
+    /// frame with paint: the extent scale of its `ext−` (how far that material will move).
+    pub fn set_target_extent(&mut self, extent_scale: f32) {
+        if extent_scale.is_finite() && extent_scale >= 0.0 {
+            self.target_extent = Some(extent_scale);
+        }
+    }
+
+    /// The factor `k` the target's extents are scaled by (fixed at the first frame with paint).
+    pub fn extent_factor(&self) -> Option<f32> {
+        self.ext_factor
     }
 
     /// Also produce [`DebugViews`] with every frame.
@@ -338,7 +385,16 @@ impl Synthesizer {
             });
         };
         let full = g;
-        let cropped = crop_guides(g, win);
+        let mut cropped = crop_guides(g, win);
+        let k = *self.ext_factor.get_or_insert_with(|| {
+            let e_t = self.target_extent.unwrap_or_else(|| crate::guide::extent_scale(std::slice::from_ref(g)));
+            let e_s = self.source.pyramid.ext_scale;
+            if self.params.ext_normalize && e_t > e_s && e_t > 0.0 { e_s / e_t } else { 1.0 }
+        });
+        if k != 1.0 {
+            cropped.ext_pos = cropped.ext_pos.map(|v| v * k);
+            cropped.ext_neg = cropped.ext_neg.map(|v| v * k);
+        }
         let g = &cropped;
         let (w, h) = g.mask.size();
         let mut pyr: Vec<FrameGuides> = Vec::with_capacity(levels);
@@ -360,7 +416,19 @@ impl Synthesizer {
         // The previous frame's state, moved into this frame's window.
         let prev_here: Option<PrevState> = self.prev.as_ref().map(|prev| rewindow(prev, (win.0, win.1), &pyr));
         let shifted0 = prev_here.as_ref().map(|prev| {
-            shift::shift_nnf(&src.levels[0], &prev.nnf0, &prev.ext_pos, g.ext_pos.data(), &active0, p.time_shift)
+            let inputs = shift::ShiftInputs {
+                src: &src.levels[0],
+                ext_prev: &prev.ext_pos,
+                ext_cur: g.ext_pos.data(),
+                flow_prev: &prev.flow,
+                dist_cur: g.dist.data(),
+                band: b,
+                step_cost: shift::step_cost(src.ext_scale, src.levels[0].frames),
+                active: &active0,
+                time_shift: p.time_shift,
+                advect: p.advect,
+            };
+            shift::shift_nnf(&inputs, &prev.nnf0)
         });
         let has_prev = shifted0.as_ref().is_some_and(|n| n.data.iter().any(|m| m.ok));
         st.shift += t_shift.elapsed();
@@ -403,9 +471,9 @@ impl Synthesizer {
                 None => {
                     let mut f = prev_down.clone().unwrap_or_else(|| Nnf::new(lw, lh));
                     let had_prev = prev_down.is_some();
-                    sanitize(&mut f, sl, &tgt);
                     let ctx = Ctx::new(sl, &tgt, None, 1.0, p, keys(u64::MAX));
-                    fill_holes(&ctx, &mut f);
+                    sanitize(&ctx, &mut f);
+                    repair(&ctx, &mut f);
                     if !had_prev {
                         // First frame: random field, then one guide-only PatchMatch pass (thesis §4.2).
                         let ctx = Ctx { w_col: 0.0, ..ctx };
@@ -415,14 +483,11 @@ impl Synthesizer {
                 }
                 Some(coarse) => {
                     let mut up = coarse.upscale(lw, lh);
-                    sanitize(&mut up, sl, &tgt);
-                    if !finest_vote_only {
-                        fill_holes(&Ctx::new(sl, &tgt, None, 1.0, p, keys(u64::MAX)), &mut up);
-                    }
+                    let init = Ctx::new(sl, &tgt, None, 1.0, p, keys(u64::MAX));
+                    sanitize(&init, &mut up);
+                    repair(&init, &mut up);
                     if let Some(mut pd) = prev_down.clone() {
-                        if !finest_vote_only {
-                            sanitize(&mut pd, sl, &tgt);
-                        }
+                        sanitize(&init, &mut pd);
                         // MERGENNF: per pixel, the field with the smaller error (against the
                         // estimate voted from the up-scaled field).
                         let voted = timed(&mut st.vote, || vote::vote(sl, &up, paper, p.vote_sigma));
@@ -488,17 +553,38 @@ impl Synthesizer {
                 }
                 [m.x / s0.w as f32, m.y / s0.h as f32, m.i as f32 / (s0.frames - 1).max(1) as f32]
             });
-            DebugViews { nnf, omega: omega_view.unwrap_or_else(|| Plane::new(1, 1)) }
+            let raw = |f: &Nnf| {
+                Plane::from_fn(fw, fh, |x, y| {
+                    let Some((x, y)) = inside(x, y) else { return [f32::NAN; 4] };
+                    let m = f.get(x, y);
+                    if !m.ok {
+                        return [f32::NAN; 4];
+                    }
+                    [m.i as f32, m.x, m.y, m.s.atan2(m.c)]
+                })
+            };
+            let shifted = shifted0.as_ref().map(raw).unwrap_or_else(|| Plane::filled(fw, fh, [f32::NAN; 4]));
+            DebugViews { nnf, omega: omega_view.unwrap_or_else(|| Plane::new(1, 1)), field: raw(&field), shifted }
         });
-        self.prev = Some(PrevState { origin: (win.0, win.1), nnf0: field, ext_pos: g.ext_pos.data().to_vec(), masks });
+        self.prev = Some(PrevState {
+            origin: (win.0, win.1),
+            nnf0: field,
+            ext_pos: g.ext_pos.data().to_vec(),
+            flow: g.flow.data().to_vec(),
+            masks,
+        });
         self.frame += 1;
         Ok(SynthFrame { rgb, mask: full.mask.clone(), level_times, stages: st, evaluations, energy, debug })
     }
 }
 
-/// The working window `(x0, y0, w, h)` of a frame: the mask's bounding box grown by the patch
-/// radius and a margin, its corner aligned to multiples of `align` (2^(levels−1), so every
-/// pyramid level of the window starts on a whole pixel). `None` for an empty mask.
+/// The working window `(x0, y0, w, h)` of a frame: the mask's bounding box grown by a margin of
+/// `(⌊n/2⌋ + 1)·align + 4` pixels, its corner aligned to multiples of `align` (2^(levels−1), so
+/// every pyramid level of the window starts on a whole pixel). The margin is what a patch of
+/// the coarsest level reaches beyond the mask: with less, coarse target patches near the edge
+/// read the arrays' clamp-to-edge padding where the exemplar's read real surroundings, and
+/// even a target equal to an exemplar frame would not match it exactly. `None` for an empty
+/// mask.
 fn window(mask: &Mask, align: usize) -> Option<(usize, usize, usize, usize)> {
     let (w, h) = mask.size();
     let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0usize, 0usize);
@@ -515,7 +601,7 @@ fn window(mask: &Mask, align: usize) -> Option<(usize, usize, usize, usize)> {
     if x0 == usize::MAX {
         return None;
     }
-    let m = HALF + 4;
+    let m = (HALF + 1) * align + 4;
     let (x0, y0) = (x0.saturating_sub(m) / align * align, y0.saturating_sub(m) / align * align);
     let (x1, y1) = ((x1 + m).min(w), (y1 + m).min(h));
     Some((x0, y0, x1 - x0, y1 - y0))
@@ -544,11 +630,13 @@ fn rewindow(prev: &PrevState, to: (usize, usize), pyr: &[FrameGuides]) -> PrevSt
     };
     let mut nnf0 = Nnf::new(w, h);
     let mut ext_pos = vec![0.0; w * h];
+    let mut flow = vec![glam::Vec2::ZERO; w * h];
     for y in 0..h {
         for x in 0..w {
             if let Some(k) = map(x, y, 1, prev.nnf0.w, prev.nnf0.h) {
                 nnf0.data[y * w + x] = prev.nnf0.data[k];
                 ext_pos[y * w + x] = prev.ext_pos[k];
+                flow[y * w + x] = prev.flow[k];
             }
         }
     }
@@ -570,7 +658,7 @@ fn rewindow(prev: &PrevState, to: (usize, usize), pyr: &[FrameGuides]) -> PrevSt
                 .collect()
         })
         .collect();
-    PrevState { origin: to, nnf0, ext_pos, masks }
+    PrevState { origin: to, nnf0, ext_pos, flow, masks }
 }
 
 /// Writes voted colors into the rgb lanes of `T^rgb` (`cur`) or `T^prev` (`!cur`).
@@ -594,15 +682,18 @@ fn write_lanes(tgt: &mut TargetLevel, rgb: &[Rgb], cur: bool) {
     });
 }
 
-/// Makes every match usable by the kernel: drops matches of inactive pixels, clamps frame
-/// indices and centers into the valid margin (centers may have drifted out through
-/// up-scaling or the time shift). θ is kept, as the paper keeps it through UPSCALENNF and
-/// SHIFTNNF.
-fn sanitize(nnf: &mut Nnf, src: &SourceLevel, tgt: &TargetLevel) {
+/// Makes every inherited match (up-scaled, shifted in time, carried over) usable: frame
+/// indices and centers clamped into the valid margin (centers may have drifted out through
+/// up-scaling or the time shift; θ is kept, as the paper keeps it through UPSCALENNF and
+/// SHIFTNNF), and a match whose center is not a valid center of its target pixel's segment
+/// (border or interior) is dropped, as the search would never have chosen it. Matches of
+/// inactive pixels are dropped too.
+fn sanitize(ctx: &Ctx, nnf: &mut Nnf) {
+    let src = ctx.src;
     let (xmax, ymax) = ((src.w - 1 - MARGIN) as f32, (src.h - 1 - MARGIN) as f32);
     let last = (src.frames - 1) as u16;
-    nnf.data.par_iter_mut().zip(tgt.info.par_iter()).for_each(|(m, inf)| {
-        if inf.flags & source::VALID == 0 {
+    nnf.data.par_iter_mut().enumerate().for_each(|(q, m)| {
+        if ctx.tgt.info[q].flags & source::VALID == 0 {
             *m = Match::NONE;
             return;
         }
@@ -611,20 +702,50 @@ fn sanitize(nnf: &mut Nnf, src: &SourceLevel, tgt: &TargetLevel) {
             m.y = m.y.clamp(MARGIN as f32, ymax);
             m.i = m.i.min(last);
             m.err = f32::INFINITY;
+            if ctx.check(ctx.wanted_segment(q), m.i as usize, m.x, m.y).is_none() {
+                *m = Match::NONE;
+            }
         }
     });
 }
 
-/// Gives every active pixel without a match a random one.
-fn fill_holes(ctx: &Ctx, nnf: &mut Nnf) {
-    let w = nnf.w;
+/// Gives every active pixel without a match one: the first of its four neighbours' matches,
+/// moved by the one-pixel offset (rotated), that is a valid center of its segment — the
+/// propagation step of PatchMatch, which keeps the field coherent where a few inherited
+/// matches were dropped — or else a random one. Reads the field as it was before (the result
+/// does not depend on the order of the pixels).
+fn repair(ctx: &Ctx, nnf: &mut Nnf) {
+    let (w, h) = (nnf.w, nnf.h);
+    if !nnf.data.iter().enumerate().any(|(q, m)| !m.ok && ctx.tgt.info[q].flags & source::VALID != 0) {
+        return;
+    }
+    let before = nnf.data.clone();
     nnf.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
         for (x, m) in row.iter_mut().enumerate() {
             let q = y * w + x;
-            if !m.ok && ctx.tgt.info[q].flags & source::VALID != 0 {
-                let mut rng = Rng::keyed(&[ctx.keys[0], ctx.keys[1], ctx.keys[2], 0x5eed, q as u64]);
-                *m = ctx.random_match(q, &mut rng);
+            if m.ok || ctx.tgt.info[q].flags & source::VALID == 0 {
+                continue;
             }
+            let seg = ctx.wanted_segment(q);
+            let from = [(-1isize, 0isize), (1, 0), (0, -1), (0, 1)];
+            let propagated = from.iter().find_map(|&(dx, dy)| {
+                let (nx, ny) = (x as isize + dx, y as isize + dy);
+                if nx < 0 || ny < 0 || nx >= w as isize || ny >= h as isize {
+                    return None;
+                }
+                let n = before[ny as usize * w + nx as usize];
+                if !n.ok {
+                    return None;
+                }
+                // One step from the neighbour to q is M·(−dx, −dy) in the source.
+                let (ox, oy) = n.rotate(-dx as f32, -dy as f32);
+                let (cx, cy) = (n.x + ox, n.y + oy);
+                ctx.check(seg, n.i as usize, cx, cy).map(|_| Match { x: cx, y: cy, err: f32::INFINITY, ..n })
+            });
+            *m = propagated.unwrap_or_else(|| {
+                let mut rng = Rng::keyed(&[ctx.keys[0], ctx.keys[1], ctx.keys[2], 0x5eed, q as u64]);
+                ctx.random_match(q, &mut rng)
+            });
         }
     });
 }

@@ -151,6 +151,37 @@ pub(crate) fn counts(src: &SourceLevel, nnf: &Nnf, tgt: &TargetLevel, r: usize) 
     out
 }
 
+/// `1/ω*` of every exemplar frame i and segment (0 where the target or the frame has no pixel
+/// of the segment), with the count a voxel of frame i has when the field's matches are spread
+/// uniformly over the pixels of the 2r+1 frames of its box:
+///
+/// ```text
+/// ω*_seg,i = n² · |T_seg| / |S_seg,i|
+/// ```
+///
+/// The papers divide by the exemplar's pixels over *all* frames (`n²(2r+1)|T|/|S|`), as if the
+/// field of one target frame spread over the whole sequence; but it draws from the few exemplar
+/// frames its motion calls for (the extents and the time shift choose them), and each voxel's
+/// count Ω* sums only the 2r+1 frames of its box. With the papers' ω* a one-to-one use of a
+/// frame — the exemplar itself, on its own masks — scores `|S|/((2r+1)|S_i|)` times "uniform"
+/// (≈ 2.7 mid-sequence, ≈ 48 on a small first frame) and the penalty pushes the search away
+/// from the perfect match. Per frame, one-to-one use scores 1 whether the field takes one
+/// frame or spreads over the box, and only spatial over-use stands out. (ω* does not depend
+/// on the current field: normalizing by the use the field makes of each frame would make
+/// frames cheaper the more they are used.)
+pub(crate) fn omega_inv(src: &SourceLevel, tgt: &TargetLevel) -> Vec<[f32; 2]> {
+    let n2 = (PATCH * PATCH) as f32;
+    (0..src.frames)
+        .map(|i| {
+            std::array::from_fn(|seg| {
+                let t = tgt.seg_count[seg] as f32;
+                let s = src.seg_count[i][seg] as f32;
+                if t > 0.0 && s > 0.0 { s / (n2 * t) } else { 0.0 }
+            })
+        })
+        .collect()
+}
+
 /// Penalties above this many times λ/n² (the per-tap penalty of a voxel used exactly as often
 /// as uniform use would, Ω* = ω*) are clamped when stored in the features' occurrence lane.
 pub(crate) const OMEGA_CAP: f32 = 32.0;
@@ -201,17 +232,9 @@ impl Occurrence {
         mark(src, nnf, tgt, &mut self.marks);
         let n2 = (PATCH * PATCH) as f32;
         let w_omega = OMEGA_CAP * lambda / n2 / (255.0 * 255.0);
-        // (q/255)² = penalty/(OMEGA_CAP·λ/n²) = Ω*/(OMEGA_CAP·ω*), so q = 255·√(Ω* · k_seg).
-        let k: [f32; 2] = std::array::from_fn(|seg| {
-            let t = tgt.seg_count[seg] as f32;
-            let s = src.seg_count[seg] as f32;
-            if t > 0.0 && s > 0.0 {
-                // 1/(OMEGA_CAP·ω*) with ω* = n²(2r+1)|T|/|S|
-                s / (OMEGA_CAP * n2 * (2 * r + 1) as f32 * t)
-            } else {
-                0.0
-            }
-        });
+        // (q/255)² = penalty/(OMEGA_CAP·λ/n²) = Ω*/(OMEGA_CAP·ω*), so q = 255·√(Ω* · k), with
+        // k = 1/(OMEGA_CAP·ω*_seg,i) per frame i and segment.
+        let k: Vec<[f32; 2]> = omega_inv(src, tgt).into_iter().map(|v| v.map(|x| x / OMEGA_CAP)).collect();
         // One pass per column of pixels (the same pixel range of every frame): add the parts,
         // sum along time, write the lane, clear the splats.
         let fl = src.frame_len;
@@ -226,7 +249,7 @@ impl Occurrence {
                         0
                     } else {
                         let seg = (f[FLAG_LANE] & INTERIOR != 0) as usize;
-                        ((255.0 * (c as f32 * k[seg]).sqrt() + 0.5) as u32).min(255) as u8
+                        ((255.0 * (c as f32 * k[i][seg]).sqrt() + 0.5) as u32).min(255) as u8
                     };
                 }
             });
@@ -313,7 +336,8 @@ mod tests {
                 // Every other lane is the level's own.
                 assert_eq!(f[..OMEGA_LANE], src.feat[k][..OMEGA_LANE]);
                 let seg = (f[FLAG_LANE] & INTERIOR != 0) as usize;
-                let omega_star = n2 * (2 * r + 1) as f32 * tgt.seg_count[seg] as f32 / src.seg_count[seg] as f32;
+                let frame = k / src.frame_len;
+                let omega_star = n2 * tgt.seg_count[seg] as f32 / src.seg_count[frame][seg] as f32;
                 // w_Ω·q² ≈ λ·Ω*/(n²·ω*), capped at OMEGA_CAP·λ/n².
                 let penalty = (lambda * c as f32 / (n2 * omega_star)).min(OMEGA_CAP * lambda / n2);
                 let stored = w * (f[OMEGA_LANE] as f32).powi(2);

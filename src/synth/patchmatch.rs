@@ -237,8 +237,9 @@ impl<'a> Ctx<'a> {
             Some(f) => ([self.rotation_like(q, s_dir, f); 2], 1),
             None => self.rotations(q, s_dir),
         };
+        let coh = if like.is_none() { self.params.coherence } else { 1.0 };
         let keep = |best: &mut Match, (c, s, flip): (f32, f32, bool), e: f32| {
-            if e < best.err {
+            if e * coh < best.err {
                 *best = Match { x, y, c, s, err: e, i: i as u16, flip, ok: true };
             }
         };

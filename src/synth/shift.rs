@@ -3,37 +3,77 @@
 //! matches the target motion, and m(q) modulates the temporal weight.
 
 use super::nnf::{Match, Nnf};
-use super::source::{IN_MASK, SourceLevel, VALID};
+use super::source::{FLOW_EPS, IN_MASK, SourceLevel, VALID};
 use super::target::TargetLevel;
+use glam::Vec2;
 use rayon::prelude::*;
 
-/// SHIFTNNF. `prev` is the previous frame's full-resolution field, `ext_prev` / `ext_cur` are
-/// `T^ext+` of the previous and the current frame (row-major, full resolution), `active`
-/// tells which pixels the current frame synthesizes.
+/// What SHIFTNNF needs besides the previous field, over the current working window at full
+/// resolution (row-major).
+pub(crate) struct ShiftInputs<'a> {
+    pub src: &'a SourceLevel,
+    /// `T^ext+` of the previous and of the current frame (scaled like every target extent).
+    pub ext_prev: &'a [f32],
+    pub ext_cur: &'a [f32],
+    /// `T^flow` of the previous frame: the motion from it to the current one.
+    pub flow_prev: &'a [Vec2],
+    /// `T^dist` of the current frame.
+    pub dist_cur: &'a [f32],
+    /// The border width b: matches within it of an edge are re-anchored.
+    pub band: f32,
+    /// What one frame of time travel beyond the nominal step costs, in pixels of motion
+    /// ([`step_cost`]).
+    pub step_cost: f32,
+    /// Pixels the current frame synthesizes.
+    pub active: &'a [bool],
+    /// The time shift ([`super::ParamsBuilder::time_shift`]).
+    pub time_shift: bool,
+    /// Residual advection and re-anchoring ([`super::ParamsBuilder::advect`]).
+    pub advect: bool,
+}
+
+/// Pixels of motion that one frame of deviation from the nominal step costs in the paper's
+/// rule alone (no advection): a tie-breaker, far below any real difference of motion.
+const TIE_BREAK: f32 = 0.02;
+
+/// The cost of one frame of time travel beyond the nominal step when the rest of the motion
+/// is carried by advection: a quarter of the exemplar's mean speed (its extent scale over its
+/// frames). A step of the exemplar's time is worth taking only where it supplies at least
+/// that much motion; where the paint at a match hardly moves (a bloom's still center, its
+/// settled last frames), running through many frames would only change the paint's look for
+/// nothing (or, backwards, un-spread it), and the motion is carried instead.
+pub(crate) fn step_cost(ext_scale: f32, frames: usize) -> f32 {
+    (0.25 * ext_scale / frames.max(1) as f32).max(TIE_BREAK)
+}
+
+/// SHIFTNNF (paper §3.4), extended.
 ///
 /// For a match (i, x, y) with aligned flows, Δi ≥ 0 minimizes
-/// `|ΔT − (S^ext+(i+Δi, x, y) − S^ext+(i, x, y))|` with `ΔT = T^ext+(j) − T^ext+(j−1)`;
-/// with opposite flows ([`Match::flip`]), Δi ≤ 0 minimizes the same with `S^ext−`.
-/// Δi stays inside the exemplar (when it runs out the paint lags; m(q) handles that).
-pub(crate) fn shift_nnf(
-    src: &SourceLevel,
-    prev: &Nnf,
-    ext_prev: &[f32],
-    ext_cur: &[f32],
-    active: &[bool],
-    enabled: bool,
-) -> Nnf {
+/// `|ΔT − (S^ext+(i+Δi, x, y) − S^ext+(i, x, y))| + c·|Δi − 1|` with
+/// `ΔT = T^ext+(j) − T^ext+(j−1)`; with opposite flows ([`Match::flip`]), Δi ≤ 0 minimizes
+/// the same with `S^ext−` and `c·|Δi|`: near-ties go to the nominal step — one exemplar frame
+/// per target frame for aligned flows (stationary paint keeps its own pace instead of stopping),
+/// none for opposite flows (time runs backwards only as far as the motion asks). The paper's
+/// rule is `c → 0`; with advection `c` = [`step_cost`].
+///
+/// Then, with [`ShiftInputs::advect`]: the motion the time shift did not supply is carried —
+/// the match moves upstream along the target flow by the rest, so the target pixel shows what
+/// was that far behind it (the exemplar's evolution carries as much of the motion as it can,
+/// advection the rest; when the exemplar runs out of frames, all of it) — and within the
+/// border band the match is re-anchored to the target's distance from the edge.
+pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
+    let src = inp.src;
     let mut out = Nnf::new(prev.w, prev.h);
     out.data.par_iter_mut().enumerate().for_each(|(q, o)| {
         let m = &prev.data[q];
-        if !m.ok || !active[q] {
+        if !m.ok || !inp.active[q] {
             return;
         }
-        if !enabled {
+        if !inp.time_shift {
             *o = Match { err: f32::INFINITY, ..*m };
             return;
         }
-        let dt = ext_cur[q] - ext_prev[q];
+        let dt = inp.ext_cur[q] - inp.ext_prev[q];
         let i = m.i as usize;
         let Some((idx0, _)) = src.info_at(i, m.x, m.y) else {
             *o = *m;
@@ -45,23 +85,120 @@ pub(crate) fn shift_nnf(
             if m.flip { inf.ext_neg } else { inf.ext_pos }
         };
         let base = val(i);
-        let mut best = (dt - 0.0).abs();
-        let mut best_i = i;
+        let nominal_step = if m.flip { 0 } else { 1 };
+        let c = if inp.advect { inp.step_cost } else { TIE_BREAK };
+        let cost = |k: usize| (dt - (val(k) - base)).abs() + c * k.abs_diff(i).abs_diff(nominal_step) as f32;
+        let mut best_i = if m.flip || i + 1 >= src.frames { i } else { i + 1 };
+        let mut best = cost(best_i);
         let mut consider = |k: usize| {
-            let d = (dt - (val(k) - base)).abs();
+            let d = cost(k);
             if d < best {
                 best = d;
                 best_i = k;
             }
         };
+        consider(i);
         if m.flip {
             (0..i).rev().for_each(&mut consider);
         } else {
             (i + 1..src.frames).for_each(&mut consider);
         }
-        *o = Match { i: best_i as u16, err: f32::INFINITY, ..*m };
+        let shifted = Match { i: best_i as u16, err: f32::INFINITY, ..*m };
+        *o = shifted;
+        if !inp.advect {
+            return;
+        }
+        // The motion the exemplar's own evolution did not supply is carried: the match moves
+        // upstream by the rest, so the target pixel shows what was `rest` pixels behind it.
+        let (mut x, mut y) = (m.x, m.y);
+        let f = inp.flow_prev[q];
+        let speed = f.length();
+        if speed >= FLOW_EPS {
+            let supplied = (val(best_i) - base).abs();
+            let rest = (speed - supplied).clamp(-speed, speed);
+            let (dx, dy) = m.rotate(f.x / speed * rest, f.y / speed * rest);
+            (x, y) = (x - dx, y - dy);
+        }
+        // Near the edge, the match is re-anchored to the target's distance from the edge: the
+        // rim of paint travels with the edge. (Flow magnitudes only approximate how far an
+        // edge moves, and the small errors of every frame would add up to a lagging, pale rim.)
+        if let Some((x2, y2)) = reanchor(src, best_i, x, y, inp.dist_cur[q], inp.band) {
+            (x, y) = (x2, y2);
+        }
+        // The move must stay valid and on the same side of any divide of the exemplar's flow
+        // (its source, where the paint started). The rotation M turns with the exemplar's flow
+        // direction between the two points, so it still maps the target's flow onto the
+        // exemplar's where the match now is (the θ rule holds after the move).
+        let info_at = |x: f32, y: f32| src.nearest(best_i, x, y).map(|idx| &src.info[idx]);
+        if (x, y) == (m.x, m.y) {
+            return;
+        }
+        let Some(to) = info_at(x, y).filter(|to| to.flags & VALID != 0) else { return };
+        let (mut c, mut s) = (m.c, m.s);
+        if let Some(from) = info_at(m.x, m.y)
+            && from.dir != Vec2::ZERO
+            && to.dir != Vec2::ZERO
+        {
+            let (cos_p, sin_p) = (from.dir.dot(to.dir), from.dir.perp_dot(to.dir));
+            if cos_p < 0.0 {
+                return;
+            }
+            let n = (cos_p * cos_p + sin_p * sin_p).sqrt();
+            let (cos_p, sin_p) = (cos_p / n, sin_p / n);
+            (c, s) = (m.c * cos_p - m.s * sin_p, m.s * cos_p + m.c * sin_p);
+        }
+        *o = Match { x, y, c, s, ..shifted };
     });
     out
+}
+
+/// The source distance field of frame i at (x, y), bilinear, and its gradient (central
+/// differences of the samples); `None` outside the frame.
+fn dist_and_gradient(src: &SourceLevel, i: usize, x: f32, y: f32) -> Option<(f32, Vec2)> {
+    let d = |x: f32, y: f32| -> Option<f32> {
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (xi, yi) = (x0 as isize, y0 as isize);
+        if xi < 0 || yi < 0 || xi + 1 >= src.w as isize || yi + 1 >= src.h as isize {
+            return None;
+        }
+        let at = |a: usize, b: usize| src.info[src.index(i, a, b)].dist;
+        let (xi, yi) = (xi as usize, yi as usize);
+        let top = at(xi, yi) * (1.0 - fx) + at(xi + 1, yi) * fx;
+        let bot = at(xi, yi + 1) * (1.0 - fx) + at(xi + 1, yi + 1) * fx;
+        Some(top * (1.0 - fy) + bot * fy)
+    };
+    let c = d(x, y)?;
+    let g = Vec2::new(d(x + 1.0, y)? - d(x - 1.0, y)?, d(x, y + 1.0)? - d(x, y - 1.0)?) * 0.5;
+    Some((c, g))
+}
+
+/// Most pixels a match moves in one re-anchoring step.
+const REANCHOR_MAX: f32 = 3.0;
+
+/// Moves the source point (x, y) of frame i along the gradient of its distance field until its
+/// distance from the exemplar's edge equals the target's, `t_dist`, when either lies within
+/// `band` pixels of its edge (two Newton steps of at most [`REANCHOR_MAX`] pixels). `None`
+/// where nothing moves or there is no gradient.
+fn reanchor(src: &SourceLevel, i: usize, x: f32, y: f32, t_dist: f32, band: f32) -> Option<(f32, f32)> {
+    let (mut x, mut y) = (x, y);
+    let mut moved = false;
+    for _ in 0..2 {
+        let (sd, g) = dist_and_gradient(src, i, x, y)?;
+        if sd.min(band) == t_dist.min(band) {
+            break;
+        }
+        let e = (t_dist.min(band.max(sd)) - sd).clamp(-REANCHOR_MAX, REANCHOR_MAX);
+        let gl = g.length();
+        if gl < 0.5 || e.abs() < 0.05 {
+            break;
+        }
+        let step = g / gl * e / gl.min(1.0);
+        x += step.x;
+        y += step.y;
+        moved = true;
+    }
+    moved.then_some((x, y))
 }
 
 /// `1 − smoothstep(v; m_l, m_u)`: 1 for v ≤ m_l, 0 for v ≥ m_u (the thesis's

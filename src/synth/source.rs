@@ -216,8 +216,8 @@ pub(crate) struct SourceLevel {
     /// outside the mask or in the wrong segment from a table that stays in cache, without
     /// reading the exemplar at a random place.
     pub valid_bits: [Vec<u64>; 3],
-    /// |S_seg|: mask pixels per segment over all frames (for ω*).
-    pub seg_count: [usize; 2],
+    /// |S_seg,i|: mask pixels per segment (0 border, 1 interior) of each frame i (for ω*).
+    pub seg_count: Vec<[usize; 2]>,
     /// Lane weights in quantization units ([`Quant::weights`]).
     pub lane_w: [f32; LANES],
 }
@@ -401,6 +401,8 @@ pub struct SourcePyramid {
     pub(crate) levels: Vec<SourceLevel>,
     /// Largest |ext| over the exemplar (full-resolution pixels), for clamping target extents.
     pub(crate) ext_max: f32,
+    /// The exemplar's extent scale ([`crate::guide::extent_scale`]), full-resolution pixels.
+    pub(crate) ext_scale: f32,
     /// The lanes' quantization.
     pub(crate) quant: Quant,
     /// The color variance unit v ([`color_variance`]).
@@ -455,7 +457,17 @@ impl SourcePyramid {
             }
             out.push(build_level(&cur_rgb, &cur_g, &quant, quant.weights(params.w_df, params.w_ext, v), border_width));
         }
-        SourcePyramid { levels: out, ext_max, quant, color_unit: v, border_width, paper, size: frames[0].size() }
+        let ext_scale = crate::guide::extent_scale(guides);
+        SourcePyramid {
+            levels: out,
+            ext_max,
+            ext_scale,
+            quant,
+            color_unit: v,
+            border_width,
+            paper,
+            size: frames[0].size(),
+        }
     }
 
     /// Number of levels.
@@ -510,7 +522,7 @@ fn build_level(rgb: &[Plane<Rgb>], guides: &[FrameGuides], qn: &Quant, lane_w: [
     let mut feat = vec![[0u8; LANES]; frame_len * frames];
     let mut info = vec![PixInfo::default(); frame_len * frames];
     let mut valid: [Vec<u32>; 2] = [Vec::new(), Vec::new()];
-    let mut seg_count = [0usize; 2];
+    let mut seg_count = vec![[0usize; 2]; frames];
     for (i, (c, g)) in rgb.iter().zip(guides).enumerate() {
         let roi = dilate(&g.mask, HALF);
         for py in 0..h + 2 * PAD {
@@ -538,7 +550,7 @@ fn build_level(rgb: &[Plane<Rgb>], guides: &[FrameGuides], qn: &Quant, lane_w: [
                 }
                 if in_mask {
                     flags |= IN_MASK;
-                    seg_count[interior as usize] += 1;
+                    seg_count[i][interior as usize] += 1;
                 }
                 if roi.get(x, y) && away {
                     flags |= VALID;
