@@ -1,0 +1,82 @@
+//! The engine's paint fidelity on the quality suite (issue 13), at the size users run: every
+//! bundled exemplar on its own masks (the output must be the exemplar), and the generated
+//! moving targets and the long one (the exemplar's rim, texture, palette and coherence, kept
+//! over a target 10× longer than the exemplar).
+//!
+//! The floors below were set from measured values, each written beside it with the margin
+//! taken; where the issue's own floor is not reached yet, the comment says so. The numbers are
+//! statistics of whole runs, not pixels, so they may be updated when the engine changes on
+//! purpose — by measuring again (`fluidymation quality`, the same options) and keeping a
+//! margin, never by loosening a floor to make a regression pass.
+
+use fluidymation::NoProgress;
+use fluidymation::quality::{self, SuiteOptions, SuiteReport, TargetKind};
+
+fn suite(options: SuiteOptions) -> SuiteReport {
+    let report = quality::run(&options, &NoProgress).unwrap();
+    println!("{report}");
+    report
+}
+
+/// The identity at full size, every bundled exemplar: the issue's floors (PSNR ≥ 28 dB in every
+/// frame, edge darkening ≥ 0.9 of the exemplar's, coverage IoU ≥ 0.97).
+/// Measured: PSNR 100 dB (the cap: bit-exact) in every frame of every exemplar, edge
+/// darkening 1.00, IoU of the alpha 1.00 (by color 0.97–1.00: the exemplars' own pale fringe).
+#[test]
+fn identity_gives_back_the_exemplar_at_full_size() {
+    let report = suite(SuiteOptions { targets: vec![], identity: true, ..SuiteOptions::default() });
+    assert_eq!(report.rows.len(), 5, "every bundled exemplar");
+    for r in &report.rows {
+        let id = r.identity.as_ref().unwrap();
+        let worst = id.psnr.iter().copied().fold(f32::INFINITY, f32::min);
+        assert!(worst >= 28.0, "{}: PSNR {worst:.1} dB in frame {}", r.exemplar, id.psnr_min_frame);
+        let rim = r.summary.edge_darkening_ratio;
+        assert!(rim.is_some_and(|v| v >= 0.9), "{}: edge darkening {rim:?}", r.exemplar);
+        let iou = r.coverage_alpha;
+        assert!(iou.is_some_and(|v| v >= 0.97), "{}: coverage IoU of the alpha {iou:?}", r.exemplar);
+    }
+}
+
+/// Per-run floors: `(measure, floor, measured)`; `higher` says which way is better.
+fn check(what: &str, value: Option<f32>, floor: f32, higher: bool, failures: &mut Vec<String>) {
+    let ok = value.is_some_and(|v| if higher { v >= floor } else { v <= floor });
+    if !ok {
+        failures.push(format!("{what}: {value:?}, floor {}{floor}", if higher { "≥ " } else { "≤ " }));
+    }
+}
+
+/// Moving targets at the size users run (512², 24 frames), two exemplars with different rims.
+///
+/// Measured (`quality -e blue-bloom -e ink-rims --target growing --target translating
+/// --frames 24`): IoU of the alpha 0.996–0.997, contrast 0.60–0.67, edge darkening
+/// 0.57–0.86, palette 0.022–0.053, incoherent change 0.94–1.04, motion agreement 0.60–0.68.
+/// Before the fidelity work the same targets (48 frames, README) scored IoU α 0.92–0.94, edge
+/// darkening −0.27–0.27 and incoherent change 1.22–2.0: those floors fail on that engine.
+///
+/// The issue's floors are reached for coverage, incoherent change (≤ 1.2) and motion
+/// agreement (≥ 0.6); not yet for contrast (0.85: measured 0.60–0.67), edge darkening of
+/// blue-bloom (0.8: measured 0.57–0.74) and the palette of ink-rims (0.03: 0.035–0.053).
+/// The floors below are the measured values less a margin (~0.05–0.1, noise between seeds
+/// and targets is ~0.05).
+#[test]
+fn moving_targets_keep_the_rim_texture_and_coherence() {
+    let report = suite(SuiteOptions {
+        exemplars: vec!["blue-bloom".into(), "ink-rims".into()],
+        targets: vec![TargetKind::Growing, TargetKind::Translating],
+        identity: false,
+        frames: 24,
+        ..SuiteOptions::default()
+    });
+    let mut failures = Vec::new();
+    for r in &report.rows {
+        let s = &r.summary;
+        let name = |m: &str| format!("{} {} {m}", r.exemplar, r.target);
+        check(&name("IoU α"), r.coverage_alpha, 0.98, true, &mut failures);
+        check(&name("contrast"), s.contrast_ratio, 0.55, true, &mut failures);
+        check(&name("edge darkening"), s.edge_darkening_ratio, 0.45, true, &mut failures);
+        check(&name("palette"), s.palette_distance_mean, 0.07, false, &mut failures);
+        check(&name("incoherent change"), s.incoherent_change_ratio, 1.2, false, &mut failures);
+        check(&name("motion agreement"), s.motion_agreement, 0.5, true, &mut failures);
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
