@@ -26,6 +26,7 @@ pub mod img;
 pub mod output;
 pub mod progress;
 pub mod render;
+pub mod resume;
 pub mod seq;
 pub mod synth;
 pub mod workload;

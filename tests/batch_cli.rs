@@ -67,6 +67,7 @@ fn a_batch_writes_each_file_apart_and_a_failure_does_not_stop_the_others() {
     for stem in ["quads", "waving"] {
         expected.extend(frame_names(1..=3).iter().map(|f| format!("{stem}/{f}")));
         expected.push(format!("{stem}.gif"));
+        expected.push(format!("{stem}/.fluidymation/frames.log"));
         expected.push(format!("{stem}/.fluidymation/progress.toml"));
     }
     expected.sort();
