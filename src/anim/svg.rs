@@ -263,8 +263,7 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
             what: "the SVG frames have no top-level groups or shapes to stylize".into(),
         });
     }
-    let width = ((w * options.scale).round() as u32).clamp(1, MAX_SIDE);
-    let height = ((h * options.scale).round() as u32).clamp(1, MAX_SIDE);
+    let (width, height) = super::scaled_canvas(input, w, h, options.scale)?;
     let mut warnings = Vec::new();
     if any_text {
         let msg = "SVG text is not rendered (no fonts are loaded); convert text to paths".to_string();

@@ -115,6 +115,7 @@ impl Source {
     /// Prepares an exemplar with `params` (its scale, speed and border width default to the
     /// exemplar's recommendations). Guides are computed after resampling.
     pub fn prepare(ex: &Exemplar, params: &Params) -> Result<Source> {
+        ex.validate()?;
         let scale = params.src_scale.unwrap_or(ex.meta.scale);
         let speed = params.src_speed.unwrap_or(ex.meta.speed).max(1);
         let (frames, masks) = resample_exemplar(ex, scale, speed);
@@ -143,6 +144,16 @@ impl Source {
             return Err(Error::param("exemplar frames", frames.len(), "at most 65535"));
         }
         let (w, h) = frames[0].size();
+        for (k, (f, g)) in frames.iter().zip(guides).enumerate() {
+            g.check("exemplar guides")?;
+            if f.size() != (w, h) || g.size() != (w, h) {
+                return Err(Error::param(
+                    "exemplar frames",
+                    format!("frame {} {}x{} with guides {}x{}", k + 1, f.width(), f.height(), g.size().0, g.size().1),
+                    format!("{w}x{h} like frame 1, and guides of the same size"),
+                ));
+            }
+        }
         if w < 2 * MARGIN + 2 || h < 2 * MARGIN + 2 {
             return Err(Error::param("exemplar size", format!("{}x{}", w, h), "at least 8x8 pixels"));
         }
@@ -308,6 +319,7 @@ impl Synthesizer {
     /// Synthesizes the next frame from its guides (frames must come in order and all have
     /// the same size).
     pub fn step(&mut self, g: &FrameGuides) -> Result<SynthFrame> {
+        g.check("target guides")?;
         let (w, h) = g.mask.size();
         if let Some(size) = self.size
             && size != (w, h)
