@@ -460,10 +460,10 @@ pub fn render_with(
     // Resume: check that there is something to continue, made with the same options, before
     // anything is created or computed.
     let n = range.len();
-    let input = std::fs::canonicalize(&anim.path).unwrap_or_else(|_| anim.path.clone());
+    let input = resume::input_digest(&anim.path)?;
     let fingerprint = resume::fingerprint(&format!(
         "{}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{}|{}|{:?}|{}",
-        input.display(),
+        input,
         range,
         styles_of,
         opts.recolor,

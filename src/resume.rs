@@ -42,6 +42,28 @@ pub fn fingerprint(text: &str) -> u64 {
     text.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ b as u64).wrapping_mul(0x0100_0000_01b3))
 }
 
+/// A digest of an input's content: the bytes of a file, or the names and bytes of the files of
+/// a sequence folder or glob (SVG, else PNG). Renders of the same content resume wherever it
+/// lies; an input changed since the interrupted run does not.
+pub fn input_digest(path: &Path) -> Result<u64> {
+    let mut h = crc32fast::Hasher::new();
+    let mut len = 0u64;
+    let mut add = |bytes: &[u8]| {
+        h.update(bytes);
+        len = len.wrapping_add(bytes.len() as u64);
+    };
+    if path.is_file() {
+        add(&std::fs::read(path).map_err(|e| Error::io(path, e))?);
+    } else {
+        let files = crate::seq::list_sequence(path, &["svg"]).or_else(|_| crate::seq::list_sequence(path, &["png"]))?;
+        for f in files {
+            add(f.file_name().unwrap_or_default().to_string_lossy().as_bytes());
+            add(&std::fs::read(&f).map_err(|e| Error::io(&f, e))?);
+        }
+    }
+    Ok((len << 32) ^ h.finalize() as u64)
+}
+
 /// What a user is told to do about a state that cannot be used; it also decides the words of
 /// the journal's errors.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -64,8 +64,10 @@ struct TopLevel {
 
 /// Injected style sheets (usvg honours `!important` over the file's own styles) that draw
 /// only the fills, or only the strokes.
-const FILLS_ONLY: &str = "* { stroke: none !important; }";
-const STROKES_ONLY: &str = "* { fill: none !important; }";
+/// Filters are not drawn (like effects of Lottie layers): a blur on a skewed group costs
+/// resvg seconds per frame (found by fuzzing), and what is stylized is the shapes.
+const FILLS_ONLY: &str = "* { stroke: none !important; filter: none !important; }";
+const STROKES_ONLY: &str = "* { fill: none !important; filter: none !important; }";
 
 fn sets_stroke(node: roxmltree::Node) -> bool {
     node.descendants().filter(|n| n.is_element()).any(|n| {
@@ -89,9 +91,89 @@ fn parse_xml<'a>(path: &Path, text: &'a str) -> Result<roxmltree::Document<'a>> 
     })
 }
 
+/// Largest magnitude of a number in an SVG attribute. Coordinates, radii and sizes beyond it
+/// make no sense on a canvas of at most 16 384 px, and cost unbounded work when drawn (an arc
+/// of radius 10^38 becomes millions of curve segments; found by fuzzing).
+pub const MAX_NUMBER: f64 = 1e8;
+
+/// The numbers of an attribute value: in path data and point lists a letter separates them
+/// (`M1e38L…`); elsewhere a number must not continue a name or a hex color (`#1e9999`).
+fn numbers(value: &str, path_data: bool) -> impl Iterator<Item = f64> + '_ {
+    let b = value.as_bytes();
+    let mut i = 0;
+    std::iter::from_fn(move || {
+        while i < b.len() {
+            let start = i;
+            // Numbers are consumed whole, so in path data every start is a new number.
+            let boundary = path_data || start == 0 || {
+                let p = b[start - 1];
+                !(p.is_ascii_alphanumeric() || p == b'#' || p == b'_' || p == b'.')
+            };
+            let mut j = i;
+            if j < b.len() && (b[j] == b'-' || b[j] == b'+') {
+                j += 1;
+            }
+            let digits = |j: &mut usize| {
+                let s = *j;
+                while *j < b.len() && b[*j].is_ascii_digit() {
+                    *j += 1;
+                }
+                *j > s
+            };
+            let mut any = digits(&mut j);
+            if j < b.len() && b[j] == b'.' {
+                j += 1;
+                any |= digits(&mut j);
+            }
+            if !any {
+                i = start + 1;
+                continue;
+            }
+            if j < b.len() && (b[j] == b'e' || b[j] == b'E') {
+                let mut k = j + 1;
+                if k < b.len() && (b[k] == b'-' || b[k] == b'+') {
+                    k += 1;
+                }
+                if digits(&mut k) {
+                    j = k;
+                }
+            }
+            i = j;
+            if boundary && let Ok(v) = value[start..j].parse::<f64>() {
+                return Some(v);
+            }
+        }
+        None
+    })
+}
+
+/// Refuses numbers over [`MAX_NUMBER`] in the attributes of `doc` (names, references and
+/// text are not looked at).
+fn check_numbers(path: &Path, doc: &roxmltree::Document) -> Result<()> {
+    for node in doc.descendants().filter(|n| n.is_element()) {
+        for a in node.attributes() {
+            let name = a.name();
+            if a.namespace().is_some() || matches!(name, "id" | "class" | "href" | "font-family" | "lang") {
+                continue;
+            }
+            let path_data = matches!(name, "d" | "points");
+            if let Some(v) = numbers(a.value(), path_data).find(|v| !(v.abs() <= MAX_NUMBER)) {
+                return Err(Error::Limit {
+                    path: path.to_path_buf(),
+                    what: format!("a number in the '{name}' of a <{}>", node.tag_name().name()),
+                    value: v,
+                    limit: MAX_NUMBER,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
 /// The layers of one frame, bottom first.
 fn top_level(path: &Path, text: &str) -> Result<(Vec<TopLevel>, bool)> {
     let doc = parse_xml(path, text)?;
+    check_numbers(path, &doc)?;
     let root = doc.root_element();
     if root.tag_name().name() != "svg" {
         return Err(Error::animation(path, "the root element is not <svg>"));
@@ -204,6 +286,7 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
     let mut frames_of: HashMap<String, Vec<usize>> = HashMap::new();
     let mut stroked: Vec<String> = Vec::new();
     let mut any_text = false;
+    let mut any_filter = false;
     for (f, path) in files.iter().enumerate() {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         if text.trim().is_empty() {
@@ -211,6 +294,7 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
         }
         let (layers, has_text) = top_level(path, &text)?;
         any_text |= has_text;
+        any_filter |= text.contains("<filter");
         let tree = usvg::Tree::from_str(&text, &opt).map_err(|e| Error::animation(path, format!("SVG: {e}")))?;
         let s = (tree.size().width(), tree.size().height());
         match size {
@@ -270,6 +354,11 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
         log::warn!("{}: {msg}", input.display());
         warnings.push(msg);
     }
+    if any_filter {
+        let msg = "SVG filters (blur, shadows, …) are not drawn; ignored".to_string();
+        log::warn!("{}: {msg}", input.display());
+        warnings.push(msg);
+    }
     let names: Vec<String> = order.into_iter().rev().collect();
     let regions = names
         .iter()
@@ -309,4 +398,15 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
         }
     }
     Ok(anim)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn numbers_in_attributes() {
+        let v: Vec<f64> = super::numbers("M1e38L-2.5.5 3e", true).collect();
+        assert_eq!(v, [1e38, -2.5, 0.5, 3.0]);
+        let v: Vec<f64> = super::numbers("#1e9999 rgb(1,2e3,3) layer1e9 12", false).collect();
+        assert_eq!(v, [1.0, 2e3, 3.0, 12.0]);
+    }
 }

@@ -103,15 +103,16 @@ pub struct LayerJobSummary {
 }
 
 /// Everything that decides a layer's painted frames, as one number: the composite checks
-/// that the layers it reads were painted with its own options.
-fn layer_fingerprint(anim: &Animation, opts: &RenderOptions, region: usize, style: &str) -> String {
-    let input = std::fs::canonicalize(&anim.path).unwrap_or_else(|_| anim.path.clone());
+/// that the layers it reads were painted with its own options. `input` is the
+/// [`resume::input_digest`] of the animation: the same content gives the same fingerprint
+/// wherever it lies (on another machine of a farm, say).
+fn layer_fingerprint(anim: &Animation, opts: &RenderOptions, input: u64, region: usize, style: &str) -> String {
     let r = &anim.regions[region];
     format!(
         "{:016x}",
         resume::fingerprint(&format!(
-            "layer|{}|{:?}|{}|{}|{}|{:?}|{:?}|{:?}|{}|{}x{}x{}",
-            input.display(),
+            "layer|{:016x}|{:?}|{}|{}|{}|{:?}|{:?}|{:?}|{}|{}x{}x{}",
+            input,
             opts.frames.start.min(anim.frames)..opts.frames.end.min(anim.frames),
             r.index,
             r.name,
@@ -204,7 +205,7 @@ pub fn render_layer(
     };
     output::prepare_dir(&dir)?;
     let _lock = lock(&dir)?;
-    let fingerprint = layer_fingerprint(anim, opts, region, &style);
+    let fingerprint = layer_fingerprint(anim, opts, resume::input_digest(&anim.path)?, region, &style);
     let paint_dir = dir.join(PAINT_DIR);
     let frame_file = |k: usize| output::frame_path(&paint_dir, range.start + k, anim.frames);
     let manifest_path = dir.join(LAYER_MANIFEST);
@@ -340,6 +341,7 @@ pub fn composite(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress
     let styles_of = resolve_styles(anim, opts)?;
     let cache = StyleCache::new();
     let n = range.len();
+    let input = resume::input_digest(&anim.path)?;
     let pigments: Vec<Option<Pigment>> = styles_of
         .iter()
         .enumerate()
@@ -358,7 +360,7 @@ pub fn composite(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress
                 },
                 other => other,
             })?;
-            if manifest.fingerprint != layer_fingerprint(anim, opts, region, style) {
+            if manifest.fingerprint != layer_fingerprint(anim, opts, input, region, style) {
                 return Err(Error::Corrupt {
                     path,
                     message: format!(

@@ -65,22 +65,30 @@ pub struct Case {
     pub dir: PathBuf,
     pub input: PathBuf,
     pub out: PathBuf,
+    owned: bool,
 }
 
 impl Drop for Case {
     fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.dir);
+        if self.owned {
+            let _ = std::fs::remove_dir_all(&self.dir);
+        }
     }
 }
 
 impl Case {
+    /// A case in a folder prepared elsewhere (`blob.json` and `out/`), left in place.
+    pub fn at(dir: &Path) -> Case {
+        Case { dir: dir.to_path_buf(), input: dir.join("blob.json"), out: dir.join("out"), owned: false }
+    }
+
     pub fn new(name: &str) -> Case {
         let dir = scratch_root().join(name);
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
         let input = dir.join("blob.json");
         std::fs::write(&input, animation_json()).unwrap();
-        Case { out: dir.join("out"), input, dir }
+        Case { out: dir.join("out"), input, dir, owned: true }
     }
 
     pub fn anim(&self) -> Animation {

@@ -92,7 +92,8 @@ pub fn parse(path: &Path, text: &str) -> Result<Model> {
     if ip.abs() > 1e9 || op.abs() > 1e9 {
         return Err(Error::animation(path, format!("'ip' {ip} / 'op' {op} are absurd frame numbers")));
     }
-    if op <= ip {
+    // The model keeps frame numbers in f32: they must differ there too (`op` = 1e-300).
+    if op <= ip || op as f32 <= ip as f32 {
         return Err(Error::animation(
             path,
             format!("end frame 'op' ({op}) is not after the first frame 'ip' ({ip}); the animation has no frames"),
