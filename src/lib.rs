@@ -23,6 +23,7 @@ pub mod eval;
 pub mod exemplar;
 pub mod guide;
 pub mod img;
+pub mod limits;
 pub mod output;
 pub mod progress;
 pub mod render;

@@ -269,6 +269,8 @@ struct Prepared {
 /// Resolves the style of every region and prepares the exemplars of the stylized ones (only
 /// of region `only` when given): each exemplar is loaded once, parameters are fitted to thin
 /// layers, and layers with the same exemplar and parameters share one prepared source.
+/// Before any of that, the memory the work will need is checked against the limit
+/// ([`crate::limits`]): every layer of the file, or only region `only` (a layer job).
 fn prepare(
     anim: &Animation,
     opts: &RenderOptions,
@@ -277,6 +279,20 @@ fn prepare(
     cache: &StyleCache,
 ) -> Result<Prepared> {
     let styles_of = resolve_styles(anim, opts)?;
+    let shape = match only {
+        Some(_) => crate::limits::RenderShape { width: anim.width, height: anim.height, stylized: 1, flat: 0, kept_frames: 0 },
+        None => {
+            let stylized = styles_of.iter().filter(|s| s.is_some()).count();
+            crate::limits::RenderShape {
+                width: anim.width,
+                height: anim.height,
+                stylized,
+                flat: anim.regions.len() - stylized,
+                kept_frames: if opts.eval { range.len() } else { 0 },
+            }
+        }
+    };
+    crate::limits::check_render_memory(&anim.path, &shape)?;
     let wanted = |region: usize| only.is_none_or(|o| o == region);
     let mut names: Vec<String> =
         styles_of.iter().enumerate().filter(|(r, _)| wanted(*r)).filter_map(|(_, s)| s.clone()).collect();

@@ -6,7 +6,7 @@
 //!
 //! `cargo test --release --test fuzz` runs a few hundred new cases per reader (a new seed each
 //! run, printed; `FM_FUZZ_SEED=N` repeats one); `cargo test --release --test fuzz -- --ignored`
-//! runs the heavy campaign of 200 000 cases and prints per reader the cases, failures, the
+//! runs the heavy campaign of 201 500 cases and prints per reader the cases, failures, the
 //! slowest case and the largest peak.
 
 mod exemplar;
@@ -77,19 +77,43 @@ fn every_lottie_corpus_file_loads() {
     lottie::corpus_loads();
 }
 
-/// The heavy campaign: 200 000 cases over the five readers.
-#[test]
-#[ignore = "heavy: 200 000 cases, about an hour"]
-fn heavy_campaign() {
+/// The heavy campaign, 201 500 cases over the five readers, one test per reader so that
+/// they can run side by side: `cargo test --release --test fuzz heavy -- --ignored`.
+fn heavy(reader: &Reader, cases: usize) {
     let seed = harness::seed();
-    eprintln!("heavy campaign: seed {seed}");
-    let counts = [100_000, 40_000, 35_000, 22_000, 3_000];
-    let mut failures = Vec::new();
-    for (reader, &n) in READERS.iter().zip(&counts) {
-        let report = harness::run(reader, seed, n);
-        failures.extend(report.failures);
-    }
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    eprintln!("heavy {}: seed {seed}", reader.name);
+    let report = harness::run(reader, seed, cases);
+    passed(reader, &report);
+}
+
+#[test]
+#[ignore = "heavy: 110 000 cases"]
+fn heavy_lottie() {
+    heavy(&lottie::READER, 110_000);
+}
+
+#[test]
+#[ignore = "heavy: 40 000 cases"]
+fn heavy_svg() {
+    heavy(&svg::READER, 40_000);
+}
+
+#[test]
+#[ignore = "heavy: 30 000 cases"]
+fn heavy_masks() {
+    heavy(&masks::READER, 30_000);
+}
+
+#[test]
+#[ignore = "heavy: 20 000 cases"]
+fn heavy_exemplar() {
+    heavy(&exemplar::READER, 20_000);
+}
+
+#[test]
+#[ignore = "heavy: 1 500 cases"]
+fn heavy_state() {
+    heavy(&state::READER, 1_500);
 }
 
 /// Writes one case's input into `FM_FUZZ_DUMP` (a folder), from `FM_FUZZ_SEED`,

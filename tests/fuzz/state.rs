@@ -86,6 +86,8 @@ fn edit_checkpoint(s: &mut SynthState, rng: &mut Rng) {
 }
 
 fn make(rng: &mut Rng) -> Files {
+    // The uninterrupted render is made once, before the first case's clock starts.
+    Case::new("fuzz-warm-up").reference();
     let mut files = interrupted().clone();
     let input = ("blob.json".to_string(), crate::resume_support::animation_json().into_bytes());
     for _ in 0..rng.range(1, 3) {
