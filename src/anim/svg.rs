@@ -96,6 +96,9 @@ fn parse_xml<'a>(path: &Path, text: &'a str) -> Result<roxmltree::Document<'a>> 
 /// of radius 10^38 becomes millions of curve segments; found by fuzzing).
 pub const MAX_NUMBER: f64 = 1e8;
 
+/// Farthest a drawn shape may reach from the canvas origin, pixels.
+pub const MAX_REACH: f32 = 1e6;
+
 /// The numbers of an attribute value: in path data and point lists a letter separates them
 /// (`M1e38L…`); elsewhere a number must not continue a name or a hex color (`#1e9999`).
 fn numbers(value: &str, path_data: bool) -> impl Iterator<Item = f64> + '_ {
@@ -297,6 +300,18 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
         any_filter |= text.contains("<filter");
         let tree = usvg::Tree::from_str(&text, &opt).map_err(|e| Error::animation(path, format!("SVG: {e}")))?;
         let s = (tree.size().width(), tree.size().height());
+        // Shapes drawn far outside the canvas cost unbounded work to stroke and fill (a
+        // circle scaled 2 000 000 times hangs the rasterizer; found by fuzzing).
+        let b = tree.root().abs_stroke_bounding_box();
+        let reach = [b.left(), b.top(), b.right(), b.bottom()].iter().fold(0f32, |m, v| m.max(v.abs()));
+        if !(reach <= MAX_REACH) {
+            return Err(Error::Limit {
+                path: path.clone(),
+                what: "how far a shape reaches outside the canvas, pixels".into(),
+                value: reach as f64,
+                limit: MAX_REACH as f64,
+            });
+        }
         match size {
             None => {
                 if s.0 > MAX_SIDE as f32 || s.1 > MAX_SIDE as f32 {
