@@ -42,7 +42,8 @@ fn done_error_and_usage_have_their_codes() {
     for args in [&["render", "--no-such-flag"][..], &["render"], &["inspect", demo, "--scale", "big"], &["paint"]] {
         let o = run(args);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
-        assert!(stderr(&o).contains("Usage") || stderr(&o).contains("usage"), "{}", stderr(&o));
+        let err = stderr(&o);
+        assert!(err.starts_with("error: ") && (err.contains("Usage") || err.contains("--help")), "{err}");
     }
 }
 
