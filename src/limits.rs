@@ -66,7 +66,7 @@ fn parse_size(s: &str) -> Option<u64> {
         "T" => 1 << 40,
         _ => return None,
     };
-    (v.is_finite() && v > 0.0).then(|| (v * mul as f64) as u64)
+    (v.is_finite() && v > 0.0).then_some((v * mul as f64) as u64)
 }
 
 /// The machine's memory, where it can be read (Linux).

@@ -280,7 +280,9 @@ fn prepare(
 ) -> Result<Prepared> {
     let styles_of = resolve_styles(anim, opts)?;
     let shape = match only {
-        Some(_) => crate::limits::RenderShape { width: anim.width, height: anim.height, stylized: 1, flat: 0, kept_frames: 0 },
+        Some(_) => {
+            crate::limits::RenderShape { width: anim.width, height: anim.height, stylized: 1, flat: 0, kept_frames: 0 }
+        }
         None => {
             let stylized = styles_of.iter().filter(|s| s.is_some()).count();
             crate::limits::RenderShape {

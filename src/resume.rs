@@ -228,10 +228,14 @@ impl Journal {
         }
         if num("fingerprint")? != fingerprint || num("frames")? != total as u64 {
             let message = match remedy {
-                Remedy::RenderAgain => "the interrupted render used another input, frame range, style, --keep-layers \
-                                        or parameters; resume with the same options, or render without --resume",
-                Remedy::StartOver => "the checkpoint was made with other options; the job starts again from its first \
-                                      frame",
+                Remedy::RenderAgain => {
+                    "the interrupted render used another input, frame range, style, --keep-layers \
+                                        or parameters; resume with the same options, or render without --resume"
+                }
+                Remedy::StartOver => {
+                    "the checkpoint was made with other options; the job starts again from its first \
+                                      frame"
+                }
             };
             return Err(Error::Corrupt { path: path.clone(), message: message.into() });
         }
@@ -251,26 +255,46 @@ impl Journal {
         if crc32(&log) != log_crc as u32 {
             return Err(corrupt(&log_path, out_dir, remedy, "the frames log was damaged: its checksum does not match"));
         }
-        let text = std::str::from_utf8(&log).map_err(|_| corrupt(&log_path, out_dir, remedy, "the frames log is not text"))?;
+        let text =
+            std::str::from_utf8(&log).map_err(|_| corrupt(&log_path, out_dir, remedy, "the frames log is not text"))?;
         let records: Vec<FileRecord> = text
             .lines()
             .map(|l| {
-                FileRecord::parse(l).ok_or_else(|| corrupt(&log_path, out_dir, remedy, "a line of the frames log is malformed"))
+                FileRecord::parse(l)
+                    .ok_or_else(|| corrupt(&log_path, out_dir, remedy, "a line of the frames log is malformed"))
             })
             .collect::<Result<_>>()?;
         for k in 0..done {
             if !records.iter().any(|r| r.frame == k) {
-                return Err(corrupt(&log_path, out_dir, remedy, format!("frame {} is done but was never recorded", k + 1)));
+                return Err(corrupt(
+                    &log_path,
+                    out_dir,
+                    remedy,
+                    format!("frame {} is done but was never recorded", k + 1),
+                ));
             }
         }
         if let Some(r) = records.iter().find(|r| r.frame >= done) {
-            return Err(corrupt(&log_path, out_dir, remedy, format!("'{}' is recorded but its frame is not done", r.path)));
+            return Err(corrupt(
+                &log_path,
+                out_dir,
+                remedy,
+                format!("'{}' is recorded but its frame is not done", r.path),
+            ));
         }
         // Drop what an interrupted frame appended after the commit.
         let file = std::fs::OpenOptions::new().write(true).open(&log_path).map_err(|e| Error::io(&log_path, e))?;
         file.set_len(log_len).map_err(|e| Error::io(&log_path, e))?;
-        let j =
-            Journal { out_dir: out_dir.to_path_buf(), dir, fingerprint, total, remedy, log, records, pending: Vec::new() };
+        let j = Journal {
+            out_dir: out_dir.to_path_buf(),
+            dir,
+            fingerprint,
+            total,
+            remedy,
+            log,
+            records,
+            pending: Vec::new(),
+        };
         Ok((j, done))
     }
 
@@ -315,10 +339,9 @@ impl Journal {
         match e {
             Error::Corrupt { path, message } => {
                 let message = match self.remedy {
-                    Remedy::RenderAgain => format!(
-                        "{message}; delete '{}' and render again without --resume",
-                        self.dir.display()
-                    ),
+                    Remedy::RenderAgain => {
+                        format!("{message}; delete '{}' and render again without --resume", self.dir.display())
+                    }
                     Remedy::StartOver => format!("{message}; the job starts again from its first frame"),
                 };
                 Error::Corrupt { path, message }

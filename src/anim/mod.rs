@@ -291,7 +291,7 @@ impl ColorHistogram {
 pub(crate) fn scaled_canvas(path: &Path, width: f32, height: f32, scale: f32) -> Result<(u32, u32)> {
     let side = |v: f32, what: &str| -> Result<u32> {
         let s = (v as f64 * scale as f64).round();
-        if !(s <= MAX_SIDE as f64) {
+        if s.is_nan() || s > MAX_SIDE as f64 {
             let at = if scale == 1.0 { String::new() } else { format!(" at --scale {scale}") };
             return Err(Error::Limit {
                 path: path.to_path_buf(),

@@ -160,7 +160,7 @@ fn check_numbers(path: &Path, doc: &roxmltree::Document) -> Result<()> {
                 continue;
             }
             let path_data = matches!(name, "d" | "points");
-            if let Some(v) = numbers(a.value(), path_data).find(|v| !(v.abs() <= MAX_NUMBER)) {
+            if let Some(v) = numbers(a.value(), path_data).find(|v| v.is_nan() || v.abs() > MAX_NUMBER) {
                 return Err(Error::Limit {
                     path: path.to_path_buf(),
                     what: format!("a number in the '{name}' of a <{}>", node.tag_name().name()),
@@ -304,7 +304,7 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
         // circle scaled 2 000 000 times hangs the rasterizer; found by fuzzing).
         let b = tree.root().abs_stroke_bounding_box();
         let reach = [b.left(), b.top(), b.right(), b.bottom()].iter().fold(0f32, |m, v| m.max(v.abs()));
-        if !(reach <= MAX_REACH) {
+        if reach.is_nan() || reach > MAX_REACH {
             return Err(Error::Limit {
                 path: path.clone(),
                 what: "how far a shape reaches outside the canvas, pixels".into(),

@@ -18,8 +18,8 @@
 use super::paint::Paint;
 use super::{
     Layer, Prepared, RenderOptions, RenderSummary, STATE_DIR, StyleCache, background, frame_range, layer_states,
-    next_frame, prepare, prepare_outputs, recolor_paint, resolve_styles, restore, stage_name, start_layer,
-    target_fill, verified, write_composite, write_gif,
+    next_frame, prepare, prepare_outputs, recolor_paint, resolve_styles, restore, stage_name, start_layer, target_fill,
+    verified, write_composite, write_gif,
 };
 use crate::anim::{Animation, RegionFrame};
 use crate::composite::{Pigment, StylizedLayer};

@@ -210,8 +210,8 @@ impl Synthesizer {
         if !(inside(m.x, src.w) && inside(m.y, src.h)) {
             return Err(format!("a match points to ({}, {}), outside the {}x{} exemplar", m.x, m.y, src.w, src.h));
         }
-        let norm = m.c * m.c + m.s * m.s;
-        if !((norm - 1.0).abs() <= ROTATION_TOLERANCE) {
+        let off = (m.c * m.c + m.s * m.s - 1.0).abs();
+        if off.is_nan() || off > ROTATION_TOLERANCE {
             return Err(format!("a match's rotation ({}, {}) is not a rotation", m.c, m.s));
         }
         if !(ext.is_finite() && ext >= 0.0) {

@@ -94,16 +94,17 @@ fn make(rng: &mut Rng) -> Files {
         let k = rng.below(files.len());
         let (name, bytes) = &mut files[k];
         let fix = rng.chance(0.7);
-        if name.ends_with(".state") && rng.chance(0.8) {
-            if let Some(mut s) = unframe(bytes).and_then(|p| SynthState::decode(&p)) {
-                edit_checkpoint(&mut s, rng);
-                let mut f = frame(&s.encode());
-                if !fix {
-                    f[16] ^= 1; // the checksum no longer matches
-                }
-                *bytes = f;
-                continue;
+        if name.ends_with(".state")
+            && rng.chance(0.8)
+            && let Some(mut s) = unframe(bytes).and_then(|p| SynthState::decode(&p))
+        {
+            edit_checkpoint(&mut s, rng);
+            let mut f = frame(&s.encode());
+            if !fix {
+                f[16] ^= 1; // the checksum no longer matches
             }
+            *bytes = f;
+            continue;
         }
         if name.ends_with("progress.toml") && rng.chance(0.8) {
             let text = String::from_utf8_lossy(bytes).into_owned();

@@ -83,12 +83,9 @@ fn paint(rng: &mut Rng) -> String {
         let _ = write!(s, " style=\"fill:{};stroke:{};opacity:{}\"", color(rng), color(rng), num(rng, 1.0));
     }
     if rng.chance(0.1) {
-        s.push_str(*rng.pick(&[
-            " clip-path=\"url(#c)\"",
-            " mask=\"url(#m)\"",
-            " filter=\"url(#f)\"",
-            " opacity=\"0.5\"",
-        ]));
+        let effect: &&str =
+            rng.pick(&[" clip-path=\"url(#c)\"", " mask=\"url(#m)\"", " filter=\"url(#f)\"", " opacity=\"0.5\""]);
+        s.push_str(effect);
     }
     s
 }
