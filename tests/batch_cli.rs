@@ -467,7 +467,8 @@ fn a_layer_job_never_uses_damaged_state_and_the_composite_refuses_changed_paint(
     // An interrupted job whose checkpoint was edited, or whose painted frame was damaged, is
     // not continued from there: it starts over with a warning and still gives the bytes of
     // render.
-    let damages: [(&str, fn(&Path)); 2] = [
+    type Damage = fn(&Path);
+    let damages: [(&str, Damage); 2] = [
         ("the checkpoint is unusable", |dir| {
             let p = dir.join(".fluidymation/progress.toml");
             let text = std::fs::read_to_string(&p).unwrap();

@@ -26,6 +26,7 @@
 
 use super::{Animation, LoadOptions, MAX_FRAMES, MAX_SIDE, Region, RegionFrame, RegionKind, RegionRenderer};
 use crate::error::{Error, Result};
+use crate::img::Rgba;
 use std::collections::HashMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -238,14 +239,25 @@ struct SvgSequence {
     scale: (f32, f32),
 }
 
-impl RegionRenderer for SvgSequence {
-    fn render(&self, region: usize, frame: usize) -> Result<RegionFrame> {
+/// The largest side a region is rendered at to find its dominant color when loading.
+const COLOR_SIDE: f32 = 1024.0;
+
+impl SvgSequence {
+    /// Renders region `region` of frame `frame` on a `width`×`height` canvas, the SVG's user
+    /// units scaled by `scale` (the canvas's own size and scale, or smaller ones).
+    fn render_at(
+        &self,
+        region: usize,
+        frame: usize,
+        (width, height): (u32, u32),
+        scale: (f32, f32),
+    ) -> Result<RegionFrame> {
         let path = &self.files[frame];
         let name = &self.names[region];
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let (layers, _) = top_level(path, &text)?;
         let draw = |sheet: &str| -> Result<tiny_skia::Pixmap> {
-            let mut pm = tiny_skia::Pixmap::new(self.width, self.height)
+            let mut pm = tiny_skia::Pixmap::new(width, height)
                 .ok_or_else(|| Error::animation(path, "could not allocate the canvas"))?;
             if layers.iter().any(|l| &l.name == name) {
                 let doc = isolate(&text, &layers, name);
@@ -255,7 +267,7 @@ impl RegionRenderer for SvgSequence {
                     ..Default::default()
                 };
                 let tree = usvg::Tree::from_str(&doc, &opt).map_err(|e| Error::animation(path, format!("SVG: {e}")))?;
-                let ts = tiny_skia::Transform::from_scale(self.scale.0, self.scale.1);
+                let ts = tiny_skia::Transform::from_scale(scale.0, scale.1);
                 resvg::render(&tree, ts, &mut pm.as_mut());
             }
             Ok(pm)
@@ -268,6 +280,26 @@ impl RegionRenderer for SvgSequence {
             None
         };
         Ok(RegionFrame { fill, strokes })
+    }
+
+    /// The dominant color (area-weighted mode over a 5-bit-per-channel histogram) of region
+    /// `region` in `frame`, rendered at most [`COLOR_SIDE`] px a side: a canvas larger than
+    /// that costs no more to load (canvases up to that size are measured at their own size).
+    fn dominant_color(&self, region: usize, frame: usize) -> Option<Rgba> {
+        let k = (COLOR_SIDE / self.width.max(self.height) as f32).min(1.0);
+        let small = |v: u32| ((v as f32 * k).round() as u32).max(1);
+        let fr = self
+            .render_at(region, frame, (small(self.width), small(self.height)), (self.scale.0 * k, self.scale.1 * k))
+            .ok()?;
+        let mut hist = super::ColorHistogram::default();
+        hist.add(&fr.fill);
+        hist.dominant()
+    }
+}
+
+impl RegionRenderer for SvgSequence {
+    fn render(&self, region: usize, frame: usize) -> Result<RegionFrame> {
+        self.render_at(region, frame, (self.width, self.height), self.scale)
     }
 }
 
@@ -375,7 +407,11 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
         warnings.push(msg);
     }
     let names: Vec<String> = order.into_iter().rev().collect();
-    let regions = names
+    let frames = files.len();
+    let strokes = names.iter().map(|n| stroked.contains(n)).collect();
+    let renderer = SvgSequence { files, names, strokes, width, height, scale: (width as f32 / w, height as f32 / h) };
+    let regions = renderer
+        .names
         .iter()
         .enumerate()
         .map(|(i, name)| {
@@ -389,30 +425,15 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
                 index: i + 1,
                 name: name.clone(),
                 kind: if name == ROOT_LAYER { RegionKind::SvgRoot } else { RegionKind::SvgGroup },
+                // The dominant color of its first visible frame.
+                color: renderer.dominant_color(i, visible.start).unwrap_or([1.0, 1.0, 1.0, 1.0]),
                 visible,
-                color: [1.0, 1.0, 1.0, 1.0],
-                has_strokes: stroked.contains(name),
+                has_strokes: renderer.strokes[i],
                 warnings,
             }
         })
         .collect::<Vec<_>>();
-    let frames = files.len();
-    let strokes = names.iter().map(|n| stroked.contains(n)).collect();
-    let renderer = SvgSequence { files, names, strokes, width, height, scale: (width as f32 / w, height as f32 / h) };
-    let mut anim =
-        Animation::new(input.to_path_buf(), width, height, 24.0, frames, regions, None, warnings, Box::new(renderer));
-    // Dominant colors from the first visible frame of each region.
-    for i in 0..anim.regions.len() {
-        let f = anim.regions[i].visible.start;
-        if let Ok(fr) = anim.render(i, f) {
-            let mut hist = super::ColorHistogram::default();
-            hist.add(&fr.fill);
-            if let Some(c) = hist.dominant() {
-                anim.regions[i].color = c;
-            }
-        }
-    }
-    Ok(anim)
+    Ok(Animation::new(input.to_path_buf(), width, height, 24.0, frames, regions, None, warnings, Box::new(renderer)))
 }
 
 #[cfg(test)]
