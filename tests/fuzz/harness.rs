@@ -51,6 +51,9 @@ pub fn time_limit() -> Duration {
     if cfg!(debug_assertions) { Duration::from_secs(40) } else { Duration::from_secs(2) }
 }
 
+/// A long run prints its report so far after every this many cases.
+const PROGRESS_EVERY: usize = 5_000;
+
 /// A case that runs longer than this is stopped by ending the process (after saving it).
 const HARD_LIMIT: Duration = Duration::from_secs(120);
 
@@ -286,6 +289,10 @@ pub fn run(reader: &Reader, seed: u64, cases: usize) -> Report {
         if let Some(why) = failed {
             write_files(&save_to, &files);
             report.failures.push(format!("{label}: {why} (saved as {})", save_to.display()));
+        }
+        // A long run says how far it is (with --nocapture), so that a stopped one still counts.
+        if (case + 1) % PROGRESS_EVERY == 0 && case + 1 < cases {
+            eprintln!("fuzz {} (seed {seed}) so far: {report}", reader.name);
         }
     }
     let _ = std::fs::remove_dir_all(&dir);
