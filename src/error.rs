@@ -147,6 +147,11 @@ impl Error {
     }
 }
 
+/// A number for a message: plain, or in scientific notation when very large or small.
+fn number(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-3..1e9).contains(&v.abs()) { format!("{v:e}") } else { format!("{v}") }
+}
+
 fn list(names: &[String]) -> String {
     if names.is_empty() { "(none)".to_string() } else { names.join(", ") }
 }
@@ -172,7 +177,14 @@ impl fmt::Display for Error {
             ),
             Error::Empty { path, what } => write!(f, "'{}': {}", path.display(), what),
             Error::Limit { path, what, value, limit } => {
-                write!(f, "'{}': {} is {} but at most {} is supported", path.display(), what, value, limit)
+                write!(
+                    f,
+                    "'{}': {} is {} but at most {} is supported",
+                    path.display(),
+                    what,
+                    number(*value),
+                    number(*limit)
+                )
             }
             Error::InvalidParam { name, value, allowed } => {
                 write!(f, "parameter '{}' - value '{}' is invalid: expected {}", name, value, allowed)

@@ -16,10 +16,12 @@
 //! ```
 //!
 //! An interrupted render keeps, after every completed frame, the state each layer's
-//! synthesizer carries to the next frame in `OUT_DIR/.fluidymation/`; [`RenderOptions::resume`]
-//! continues from there and gives the same frames as an uninterrupted run. After a complete
-//! render only `progress.toml` stays there, so that resuming it (in a batch, say) knows it is
-//! done.
+//! synthesizer carries to the next frame in `OUT_DIR/.fluidymation/` ([`crate::resume`]);
+//! [`RenderOptions::resume`] continues from there and gives the same frames as an
+//! uninterrupted run. Every piece of that state is checked before it is used: a damaged or
+//! foreign state is an error, and frames changed since they were written are rendered again.
+//! After a complete render only the progress file and the record of the files written stay
+//! there, so that resuming it (in a batch, say) knows it is done and checks its frames.
 //!
 //! # Batches and plans
 //!
@@ -41,9 +43,9 @@ use crate::guide::GuideStream;
 use crate::img::{self, Plane, Rgba};
 use crate::output::{self, GifOptions, GifWriter};
 use crate::progress::Progress;
+use crate::resume::{self, Journal, Remedy};
 use crate::synth::{Params, Source, Synthesizer};
 use rayon::prelude::*;
-use std::collections::BTreeMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -175,12 +177,7 @@ struct Layer {
     kept: Vec<(Vec<u8>, Vec<u8>)>,
 }
 
-/// Folder of the resume state inside the output directory.
-pub const STATE_DIR: &str = ".fluidymation";
-
-fn fnv(s: &str) -> u64 {
-    s.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ b as u64).wrapping_mul(0x0100_0000_01b3))
-}
+pub use crate::resume::STATE_DIR;
 
 /// The region to synthesize for one frame: the fill, with the strokes merged under
 /// [`StrokeMode::Stylize`].
@@ -272,6 +269,8 @@ struct Prepared {
 /// Resolves the style of every region and prepares the exemplars of the stylized ones (only
 /// of region `only` when given): each exemplar is loaded once, parameters are fitted to thin
 /// layers, and layers with the same exemplar and parameters share one prepared source.
+/// Before any of that, the memory the work will need is checked against the limit
+/// ([`crate::limits`]): every layer of the file, or only region `only` (a layer job).
 fn prepare(
     anim: &Animation,
     opts: &RenderOptions,
@@ -280,6 +279,22 @@ fn prepare(
     cache: &StyleCache,
 ) -> Result<Prepared> {
     let styles_of = resolve_styles(anim, opts)?;
+    let shape = match only {
+        Some(_) => {
+            crate::limits::RenderShape { width: anim.width, height: anim.height, stylized: 1, flat: 0, kept_frames: 0 }
+        }
+        None => {
+            let stylized = styles_of.iter().filter(|s| s.is_some()).count();
+            crate::limits::RenderShape {
+                width: anim.width,
+                height: anim.height,
+                stylized,
+                flat: anim.regions.len() - stylized,
+                kept_frames: if opts.eval { range.len() } else { 0 },
+            }
+        }
+    };
+    crate::limits::check_render_memory(&anim.path, &shape)?;
     let wanted = |region: usize| only.is_none_or(|o| o == region);
     let mut names: Vec<String> =
         styles_of.iter().enumerate().filter(|(r, _)| wanted(*r)).filter_map(|(_, s)| s.clone()).collect();
@@ -350,7 +365,8 @@ fn recolor_paint(
 
 /// Composites one frame from its regions (top-most first: a recolored layer or `None` for a
 /// flat one, with the region's flat rendering) and writes it, and with
-/// [`RenderOptions::keep_layers`] every layer alone into `layer_dirs`.
+/// [`RenderOptions::keep_layers`] every layer alone into `layer_dirs`. Returns the files
+/// written.
 fn write_composite(
     anim: &Animation,
     opts: &RenderOptions,
@@ -358,7 +374,7 @@ fn write_composite(
     frame: usize,
     results: &[(Option<StylizedLayer>, RegionFrame)],
     layer_dirs: &[PathBuf],
-) -> Result<()> {
+) -> Result<Vec<PathBuf>> {
     // Bottom to top: regions are listed top-most first.
     let frames: Vec<LayerFrame> = results
         .iter()
@@ -369,17 +385,18 @@ fn write_composite(
         })
         .collect();
     let image = composite::composite(anim.width as usize, anim.height as usize, background, &frames, opts.strokes)?;
+    let mut written = Vec::with_capacity(results.len() + 1);
     if opts.keep_layers {
         for ((st, rf), dir) in results.iter().zip(layer_dirs) {
             let layer = match st {
                 Some(l) => l.to_rgba(),
                 None => rf.fill.clone(),
             };
-            output::write_frame(dir, frame, anim.frames, &layer)?;
+            written.push(output::write_frame(dir, frame, anim.frames, &layer)?);
         }
     }
-    output::write_frame(&opts.out_dir, frame, anim.frames, &image)?;
-    Ok(())
+    written.push(output::write_frame(&opts.out_dir, frame, anim.frames, &image)?);
+    Ok(written)
 }
 
 /// Checks where the frames, the layers and the GIF go, creates the folders and removes the
@@ -461,11 +478,10 @@ pub fn render_with(
     // Resume: check that there is something to continue, made with the same options, before
     // anything is created or computed.
     let n = range.len();
-    let state_dir = opts.out_dir.join(STATE_DIR);
-    let input = std::fs::canonicalize(&anim.path).unwrap_or_else(|_| anim.path.clone());
-    let fingerprint = fnv(&format!(
+    let input = resume::input_digest(&anim.path)?;
+    let fingerprint = resume::fingerprint(&format!(
         "{}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{}|{}|{:?}|{}",
-        input.display(),
+        input,
         range,
         styles_of,
         opts.recolor,
@@ -477,21 +493,21 @@ pub fn render_with(
         styles.iter().map(|s| s.source.frames()).collect::<Vec<_>>(),
         opts.keep_layers,
     ));
-    let done = if opts.resume { read_progress(&opts.out_dir, fingerprint)?.min(n) } else { 0 };
+    let resumed =
+        if opts.resume { Some(Journal::open(&opts.out_dir, fingerprint, n, Remedy::RenderAgain)?) } else { None };
+    // The frames already written must be the ones recorded; the engine's state before the
+    // first damaged one is gone, so a damaged frame means rendering again from the start.
+    let resumed = resumed.filter(|(journal, _)| verified(journal, "rendering again from the start"));
+    let done = resumed.as_ref().map_or(0, |(_, done)| *done);
 
     // Output locations, checked before the work starts.
     let layer_dirs = prepare_outputs(anim, opts)?;
-    output::remove_stale_temporaries(&state_dir, None);
-    if !opts.resume && state_dir.exists() {
-        std::fs::remove_dir_all(&state_dir).map_err(|e| Error::io(&state_dir, e))?;
-    }
-    if done < n {
-        std::fs::create_dir_all(&state_dir).map_err(|e| Error::io(&state_dir, e))?;
-        if done == 0 {
-            // Resumable from the start: an interruption before the first frame resumes too.
-            write_progress(&state_dir, fingerprint, 0)?;
-        }
-    }
+    output::remove_stale_temporaries(&opts.out_dir.join(STATE_DIR), None);
+    // Resumable from the start: an interruption before the first frame resumes too.
+    let mut journal = match resumed {
+        Some((journal, _)) => journal,
+        None => Journal::create(&opts.out_dir, fingerprint, n, Remedy::RenderAgain)?,
+    };
 
     // Per-layer synthesizers and guide streams (the guides' backward pass runs here).
     let total_stage = "frames";
@@ -514,14 +530,7 @@ pub fn render_with(
 
     let stages: Vec<String> = (0..anim.regions.len()).map(|r| stage_name(anim, r)).collect();
     if done > 0 {
-        restore(&state_dir, done, &mut layers, &stages)?;
-        for l in layers.iter_mut() {
-            if let Some(g) = l.guides.as_mut() {
-                for _ in 0..done {
-                    g.next().transpose()?;
-                }
-            }
-        }
+        restore(&journal, done, &mut layers, &stages)?;
     }
     for (l, s) in layers.iter().zip(&stages) {
         if l.synth.is_some() && !progress.update(s, done, n) {
@@ -570,8 +579,10 @@ pub fn render_with(
                 Ok((Some(layer), rf))
             })
             .collect::<Result<_>>()?;
-        write_composite(anim, opts, &background, frame, &results, &layer_dirs)?;
-        save_state(&state_dir, fingerprint, k + 1, &layers, &stages)?;
+        for path in write_composite(anim, opts, &background, frame, &results, &layer_dirs)? {
+            journal.record(k, &path)?;
+        }
+        journal.commit(k + 1, &layer_states(&layers, &stages))?;
         written += 1;
         if !progress.update(total_stage, k + 1, n) {
             return Err(Error::Cancelled);
@@ -579,8 +590,9 @@ pub fn render_with(
     }
 
     write_gif(anim, opts, &range, &background, progress)?;
-    // The progress file stays (it says the render is complete, for a later --resume).
-    finish_state(&state_dir, n, &layers, &stages);
+    // The progress file and the frames log stay (they say the render is complete and what it
+    // wrote, for a later --resume).
+    journal.finish();
 
     let mut summaries = Vec::with_capacity(layers.len());
     for l in &layers {
@@ -670,91 +682,46 @@ fn evaluate_layer(l: &Layer, style: &Style, w: usize, h: usize) -> Result<eval::
     eval::evaluate(&frames, &style.exemplar, &masks, &options)
 }
 
-/// The state of layer `stage` after `done` frames. Every frame has its own files, so that the
-/// progress file (the commit point) never refers to states that a later, interrupted save
-/// has already overwritten.
-fn state_file(dir: &Path, stage: &str, done: usize) -> PathBuf {
-    dir.join(format!("{}.{}.state", crate::anim::slug(stage), done))
+/// The state of every stylized layer, by its stage name, to commit after a frame.
+fn layer_states<'a>(layers: &[Layer], stages: &'a [String]) -> Vec<(&'a str, Vec<u8>)> {
+    layers
+        .iter()
+        .zip(stages)
+        .filter_map(|(l, stage)| l.synth.as_ref().map(|s| (stage.as_str(), s.save_state())))
+        .collect()
 }
 
-fn progress_file(dir: &Path) -> PathBuf {
-    dir.join("progress.toml")
-}
-
-fn write_progress(dir: &Path, fingerprint: u64, done: usize) -> Result<()> {
-    let text = format!("fingerprint = {}\ndone = {}\n", fingerprint, done);
-    img::atomic_write(&progress_file(dir), |w| w.write_all(text.as_bytes()))
-}
-
-/// Writes the per-layer states after `done` frames, then the progress file (the commit
-/// point), then removes the states of the frame before.
-fn save_state(dir: &Path, fingerprint: u64, done: usize, layers: &[Layer], stages: &[String]) -> Result<()> {
-    for (l, stage) in layers.iter().zip(stages) {
-        if let Some(s) = &l.synth {
-            let bytes = s.save_state();
-            img::atomic_write(&state_file(dir, stage, done), |w| w.write_all(&bytes))?;
-        }
+/// Whether every file that `journal` recorded is as it was written; warns of each that is
+/// not, and then that the work is done again (`then`).
+fn verified(journal: &Journal, then: &str) -> bool {
+    let damage = journal.verify();
+    for d in &damage {
+        log::warn!("'{}' {}", d.path.display(), d.what);
     }
-    write_progress(dir, fingerprint, done)?;
-    if done > 0 {
-        for (l, stage) in layers.iter().zip(stages) {
-            if l.synth.is_some() {
-                let _ = std::fs::remove_file(state_file(dir, stage, done - 1));
-            }
-        }
+    if !damage.is_empty() {
+        log::warn!("files written by the interrupted render were changed or removed; {then}");
     }
-    Ok(())
+    damage.is_empty()
 }
 
-/// Removes the per-layer states of a completed render of `n` frames; the progress file stays.
-fn finish_state(dir: &Path, n: usize, layers: &[Layer], stages: &[String]) {
-    for (l, stage) in layers.iter().zip(stages) {
-        if l.synth.is_some() {
-            let _ = std::fs::remove_file(state_file(dir, stage, n));
-        }
-    }
-}
-
-/// Reads the progress of an interrupted render in `out_dir`: how many frames were done.
-/// Fails when there is none, or when it was made with other options (`fingerprint`).
-fn read_progress(out_dir: &Path, fingerprint: u64) -> Result<usize> {
-    let path = progress_file(&out_dir.join(STATE_DIR));
-    let text = std::fs::read_to_string(&path).map_err(|e| Error::Empty {
-        path: out_dir.to_path_buf(),
-        what: format!(
-            "there is no interrupted render to resume here ({}: {}); render without --resume",
-            path.display(),
-            e
-        ),
-    })?;
-    let fields: BTreeMap<&str, &str> =
-        text.lines().filter_map(|l| l.split_once('=')).map(|(k, v)| (k.trim(), v.trim())).collect();
-    let corrupt = |m: &str| Error::Corrupt { path: path.clone(), message: m.to_string() };
-    let fp: u64 = fields.get("fingerprint").and_then(|v| v.parse().ok()).ok_or_else(|| corrupt("no fingerprint"))?;
-    let done: usize = fields.get("done").and_then(|v| v.parse().ok()).ok_or_else(|| corrupt("no frame count"))?;
-    if fp != fingerprint {
-        return Err(corrupt(
-            "the interrupted render used another input, frame range, style, --keep-layers or parameters; \
-             resume with the same options, or render without --resume",
-        ));
-    }
-    Ok(done)
-}
-
-/// Restores the states written by [`save_state`] after `done` frames.
-fn restore(dir: &Path, done: usize, layers: &mut [Layer], stages: &[String]) -> Result<()> {
+/// Restores every layer's state after `done` frames from `journal`, moves its guides past
+/// those frames and checks the state against the guides of the last one.
+fn restore(journal: &Journal, done: usize, layers: &mut [Layer], stages: &[String]) -> Result<()> {
     for (l, stage) in layers.iter_mut().zip(stages) {
-        if let Some(s) = l.synth.as_mut() {
-            let file = state_file(dir, stage, done);
-            let bytes = std::fs::read(&file).map_err(|e| Error::io(&file, e))?;
-            s.load_state(&bytes, &file)?;
-            if s.frame() != done {
-                return Err(Error::Corrupt {
-                    path: file,
-                    message: format!("holds frame {} but the render stopped after {}", s.frame(), done),
-                });
-            }
+        let (Some(s), Some(guides)) = (l.synth.as_mut(), l.guides.as_mut()) else { continue };
+        let (bytes, file) = journal.load_state(stage, done)?;
+        s.load_state(&bytes, &file).map_err(|e| journal.advise(e))?;
+        if s.frame() != done {
+            return Err(journal.advise(Error::Corrupt {
+                path: file,
+                message: format!("holds frame {} but the render stopped after {}", s.frame(), done),
+            }));
         }
+        let mut last = None;
+        for _ in 0..done {
+            last = guides.next().transpose()?;
+        }
+        s.check_resumed(last.as_ref(), &file).map_err(|e| journal.advise(e))?;
     }
     Ok(())
 }

@@ -67,6 +67,7 @@ fn a_batch_writes_each_file_apart_and_a_failure_does_not_stop_the_others() {
     for stem in ["quads", "waving"] {
         expected.extend(frame_names(1..=3).iter().map(|f| format!("{stem}/{f}")));
         expected.push(format!("{stem}.gif"));
+        expected.push(format!("{stem}/.fluidymation/frames.log"));
         expected.push(format!("{stem}/.fluidymation/progress.toml"));
     }
     expected.sort();
@@ -412,4 +413,82 @@ fn a_killed_layer_job_continues_from_its_checkpoint() {
     let left: Vec<String> =
         tree(&out.join("layers/04_dress")).into_iter().filter(|n| !n.starts_with("paint/")).collect();
     assert_eq!(left, [".lock", "layer.json"]);
+}
+
+/// Kills a run of the layer job `layer` once it has painted three frames of the demo's dress.
+#[cfg(unix)]
+fn kill_after_three_frames(layer: &Job, dir: &Path) {
+    let mut child = Command::new(&layer.argv[0]).args(&layer.argv[1..]).stderr(Stdio::null()).spawn().unwrap();
+    wait_for(&mut child, &dir.join("paint/0003.png"));
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(!dir.join("layer.json").exists(), "the kill came too late");
+}
+
+/// Flips one bit in the middle of a file.
+#[cfg(unix)]
+fn flip_a_bit(path: &Path) {
+    let mut bytes = std::fs::read(path).unwrap();
+    let i = bytes.len() / 2;
+    bytes[i] ^= 0x10;
+    std::fs::write(path, bytes).unwrap();
+}
+
+#[cfg(unix)]
+#[test]
+fn a_layer_job_never_uses_damaged_state_and_the_composite_refuses_changed_paint() {
+    let tmp = Scratch::new("layer-damage");
+    let d = demo();
+    let opts = ["--scale", "0.5", "--frames", "1..12", "--exemplar", "none", "--style", "dress=blue-bloom"];
+    let rendered = tmp.join("render");
+    assert_success(&bin().arg("render").arg(&d).arg("-o").arg(&rendered).args(opts).output().unwrap());
+    let out = tmp.join("plan");
+    let (_, jobs) = plan(&[&d], &out, &opts);
+    let (layer, composite) = (&jobs[0], &jobs[1]);
+    let dir = out.join("layers/04_dress");
+
+    // A complete job whose painted frame was changed afterwards: the composite refuses it
+    // before writing anything, and the job, run again, paints the layer anew instead of
+    // finding it complete.
+    assert_success(&run_job(layer));
+    flip_a_bit(&dir.join("paint/0002.png"));
+    let o = run_job(composite);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("0002.png") && err.contains("changed") && err.contains("render-layer job again"), "{err}");
+    assert!(results(&out).is_empty(), "the refused composite wrote {:?}", tree(&out));
+    let o = run_job(layer);
+    assert_success(&o);
+    let err = stderr(&o);
+    assert!(err.contains("painting it again") && err.contains("12 frames painted in"), "{err}");
+    assert_success(&run_job(composite));
+    assert_same_results(&out, &rendered);
+
+    // An interrupted job whose checkpoint was edited, or whose painted frame was damaged, is
+    // not continued from there: it starts over with a warning and still gives the bytes of
+    // render.
+    type Damage = fn(&Path);
+    let damages: [(&str, Damage); 2] = [
+        ("the checkpoint is unusable", |dir| {
+            let p = dir.join(".fluidymation/progress.toml");
+            let text = std::fs::read_to_string(&p).unwrap();
+            let text: String = text
+                .lines()
+                .map(|l| if l.starts_with("done") { "done = 1\n".into() } else { format!("{l}\n") })
+                .collect();
+            std::fs::write(&p, text).unwrap();
+        }),
+        ("painting the layer again from its first frame", |dir| flip_a_bit(&dir.join("paint/0001.png"))),
+    ];
+    for (warning, damage) in damages {
+        std::fs::remove_dir_all(&out).unwrap();
+        kill_after_three_frames(layer, &dir);
+        damage(&dir);
+        let o = run_job(layer);
+        assert_success(&o);
+        let err = stderr(&o);
+        assert!(err.contains(warning) && err.contains("12 frames painted in"), "{warning}: {err}");
+        assert_success(&run_job(composite));
+        assert_same_results(&out, &rendered);
+    }
 }

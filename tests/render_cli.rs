@@ -87,11 +87,15 @@ fn frame_names(range: std::ops::RangeInclusive<usize>) -> Vec<String> {
     range.map(|k| format!("{k:04}.png")).collect()
 }
 
-/// The files a complete render leaves: its frames and the record that it is complete (for a
-/// later `--resume`), sorted.
+/// The files a complete render leaves: its frames and the record that it is complete and of
+/// what it wrote (for a later `--resume`), sorted.
 fn complete(frames: std::ops::RangeInclusive<usize>) -> Vec<String> {
     let mut v = frame_names(frames);
-    v.extend([".fluidymation".to_string(), ".fluidymation/progress.toml".to_string()]);
+    v.extend([
+        ".fluidymation".to_string(),
+        ".fluidymation/frames.log".to_string(),
+        ".fluidymation/progress.toml".to_string(),
+    ]);
     v.sort();
     v
 }
@@ -497,7 +501,7 @@ fn interrupted_renders_resume_to_the_same_bytes() {
     let gif = full.join("demo.gif");
     assert_success(&render(&demo(), &full, &[&args[..], &["--gif", gif.to_str().unwrap()]].concat()));
     let state = tree(&full.join(".fluidymation"));
-    assert_eq!(state, ["progress.toml"], "only the record that the render is complete stays");
+    assert_eq!(state, ["frames.log", "progress.toml"], "only the record that the render is complete stays");
 
     let out = tmp.join("out");
     let state = out.join(".fluidymation");

@@ -52,10 +52,8 @@ pub(super) fn load(path: &Path, options: &LoadOptions) -> Result<Animation> {
             limit: max as f64,
         });
     }
-    let scaled = (
-        ((size.0 as f32 * options.scale).round() as usize).max(1),
-        ((size.1 as f32 * options.scale).round() as usize).max(1),
-    );
+    let scaled = super::scaled_canvas(path, size.0 as f32, size.1 as f32, options.scale)?;
+    let scaled = (scaled.0 as usize, scaled.1 as usize);
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())

@@ -286,6 +286,25 @@ impl ColorHistogram {
     }
 }
 
+/// The canvas size of a `width × height` input at `scale`: each side rounded, at least 1 px.
+/// A side over [`MAX_SIDE`] is an error (never clamped, which would crop the output).
+pub(crate) fn scaled_canvas(path: &Path, width: f32, height: f32, scale: f32) -> Result<(u32, u32)> {
+    let side = |v: f32, what: &str| -> Result<u32> {
+        let s = (v as f64 * scale as f64).round();
+        if s.is_nan() || s > MAX_SIDE as f64 {
+            let at = if scale == 1.0 { String::new() } else { format!(" at --scale {scale}") };
+            return Err(Error::Limit {
+                path: path.to_path_buf(),
+                what: format!("canvas {what}{at}"),
+                value: s,
+                limit: MAX_SIDE as f64,
+            });
+        }
+        Ok((s as u32).max(1))
+    };
+    Ok((side(width, "width")?, side(height, "height")?))
+}
+
 /// Loads an animation: a `.json` Lottie file, a directory or glob of SVG files, or a
 /// directory of PNG masks (one region).
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Animation> {

@@ -26,6 +26,7 @@
 
 use super::{Animation, LoadOptions, MAX_FRAMES, MAX_SIDE, Region, RegionFrame, RegionKind, RegionRenderer};
 use crate::error::{Error, Result};
+use crate::img::Rgba;
 use std::collections::HashMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -64,8 +65,10 @@ struct TopLevel {
 
 /// Injected style sheets (usvg honours `!important` over the file's own styles) that draw
 /// only the fills, or only the strokes.
-const FILLS_ONLY: &str = "* { stroke: none !important; }";
-const STROKES_ONLY: &str = "* { fill: none !important; }";
+/// Filters are not drawn (like effects of Lottie layers): a blur on a skewed group costs
+/// resvg seconds per frame (found by fuzzing), and what is stylized is the shapes.
+const FILLS_ONLY: &str = "* { stroke: none !important; filter: none !important; }";
+const STROKES_ONLY: &str = "* { fill: none !important; filter: none !important; }";
 
 fn sets_stroke(node: roxmltree::Node) -> bool {
     node.descendants().filter(|n| n.is_element()).any(|n| {
@@ -89,9 +92,92 @@ fn parse_xml<'a>(path: &Path, text: &'a str) -> Result<roxmltree::Document<'a>> 
     })
 }
 
+/// Largest magnitude of a number in an SVG attribute. Coordinates, radii and sizes beyond it
+/// make no sense on a canvas of at most 16 384 px, and cost unbounded work when drawn (an arc
+/// of radius 10^38 becomes millions of curve segments; found by fuzzing).
+pub const MAX_NUMBER: f64 = 1e8;
+
+/// Farthest a drawn shape may reach from the canvas origin, pixels.
+pub const MAX_REACH: f32 = 1e6;
+
+/// The numbers of an attribute value: in path data and point lists a letter separates them
+/// (`M1e38L…`); elsewhere a number must not continue a name or a hex color (`#1e9999`).
+fn numbers(value: &str, path_data: bool) -> impl Iterator<Item = f64> + '_ {
+    let b = value.as_bytes();
+    let mut i = 0;
+    std::iter::from_fn(move || {
+        while i < b.len() {
+            let start = i;
+            // Numbers are consumed whole, so in path data every start is a new number.
+            let boundary = path_data || start == 0 || {
+                let p = b[start - 1];
+                !(p.is_ascii_alphanumeric() || p == b'#' || p == b'_' || p == b'.')
+            };
+            let mut j = i;
+            if j < b.len() && (b[j] == b'-' || b[j] == b'+') {
+                j += 1;
+            }
+            let digits = |j: &mut usize| {
+                let s = *j;
+                while *j < b.len() && b[*j].is_ascii_digit() {
+                    *j += 1;
+                }
+                *j > s
+            };
+            let mut any = digits(&mut j);
+            if j < b.len() && b[j] == b'.' {
+                j += 1;
+                any |= digits(&mut j);
+            }
+            if !any {
+                i = start + 1;
+                continue;
+            }
+            if j < b.len() && (b[j] == b'e' || b[j] == b'E') {
+                let mut k = j + 1;
+                if k < b.len() && (b[k] == b'-' || b[k] == b'+') {
+                    k += 1;
+                }
+                if digits(&mut k) {
+                    j = k;
+                }
+            }
+            i = j;
+            if boundary && let Ok(v) = value[start..j].parse::<f64>() {
+                return Some(v);
+            }
+        }
+        None
+    })
+}
+
+/// Refuses numbers over [`MAX_NUMBER`] in the attributes of `doc` (names, references and
+/// text are not looked at).
+fn check_numbers(path: &Path, doc: &roxmltree::Document) -> Result<()> {
+    for node in doc.descendants().filter(|n| n.is_element()) {
+        for a in node.attributes() {
+            let name = a.name();
+            if a.namespace().is_some() || matches!(name, "id" | "class" | "href" | "font-family" | "lang") {
+                continue;
+            }
+            let path_data = matches!(name, "d" | "points");
+            if let Some(v) = numbers(a.value(), path_data).find(|v| v.is_nan() || v.abs() > MAX_NUMBER) {
+                return Err(Error::Limit {
+                    path: path.to_path_buf(),
+                    what: format!("a number in the '{name}' of a <{}>", node.tag_name().name()),
+                    value: v,
+                    limit: MAX_NUMBER,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
 /// The layers of one frame, bottom first.
 fn top_level(path: &Path, text: &str) -> Result<(Vec<TopLevel>, bool)> {
     let doc = parse_xml(path, text)?;
+    check_numbers(path, &doc)?;
     let root = doc.root_element();
     if root.tag_name().name() != "svg" {
         return Err(Error::animation(path, "the root element is not <svg>"));
@@ -153,14 +239,25 @@ struct SvgSequence {
     scale: (f32, f32),
 }
 
-impl RegionRenderer for SvgSequence {
-    fn render(&self, region: usize, frame: usize) -> Result<RegionFrame> {
+/// The largest side a region is rendered at to find its dominant color when loading.
+const COLOR_SIDE: f32 = 1024.0;
+
+impl SvgSequence {
+    /// Renders region `region` of frame `frame` on a `width`×`height` canvas, the SVG's user
+    /// units scaled by `scale` (the canvas's own size and scale, or smaller ones).
+    fn render_at(
+        &self,
+        region: usize,
+        frame: usize,
+        (width, height): (u32, u32),
+        scale: (f32, f32),
+    ) -> Result<RegionFrame> {
         let path = &self.files[frame];
         let name = &self.names[region];
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let (layers, _) = top_level(path, &text)?;
         let draw = |sheet: &str| -> Result<tiny_skia::Pixmap> {
-            let mut pm = tiny_skia::Pixmap::new(self.width, self.height)
+            let mut pm = tiny_skia::Pixmap::new(width, height)
                 .ok_or_else(|| Error::animation(path, "could not allocate the canvas"))?;
             if layers.iter().any(|l| &l.name == name) {
                 let doc = isolate(&text, &layers, name);
@@ -170,7 +267,7 @@ impl RegionRenderer for SvgSequence {
                     ..Default::default()
                 };
                 let tree = usvg::Tree::from_str(&doc, &opt).map_err(|e| Error::animation(path, format!("SVG: {e}")))?;
-                let ts = tiny_skia::Transform::from_scale(self.scale.0, self.scale.1);
+                let ts = tiny_skia::Transform::from_scale(scale.0, scale.1);
                 resvg::render(&tree, ts, &mut pm.as_mut());
             }
             Ok(pm)
@@ -183,6 +280,26 @@ impl RegionRenderer for SvgSequence {
             None
         };
         Ok(RegionFrame { fill, strokes })
+    }
+
+    /// The dominant color (area-weighted mode over a 5-bit-per-channel histogram) of region
+    /// `region` in `frame`, rendered at most [`COLOR_SIDE`] px a side: a canvas larger than
+    /// that costs no more to load (canvases up to that size are measured at their own size).
+    fn dominant_color(&self, region: usize, frame: usize) -> Option<Rgba> {
+        let k = (COLOR_SIDE / self.width.max(self.height) as f32).min(1.0);
+        let small = |v: u32| ((v as f32 * k).round() as u32).max(1);
+        let fr = self
+            .render_at(region, frame, (small(self.width), small(self.height)), (self.scale.0 * k, self.scale.1 * k))
+            .ok()?;
+        let mut hist = super::ColorHistogram::default();
+        hist.add(&fr.fill);
+        hist.dominant()
+    }
+}
+
+impl RegionRenderer for SvgSequence {
+    fn render(&self, region: usize, frame: usize) -> Result<RegionFrame> {
+        self.render_at(region, frame, (self.width, self.height), self.scale)
     }
 }
 
@@ -204,6 +321,7 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
     let mut frames_of: HashMap<String, Vec<usize>> = HashMap::new();
     let mut stroked: Vec<String> = Vec::new();
     let mut any_text = false;
+    let mut any_filter = false;
     for (f, path) in files.iter().enumerate() {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         if text.trim().is_empty() {
@@ -211,8 +329,21 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
         }
         let (layers, has_text) = top_level(path, &text)?;
         any_text |= has_text;
+        any_filter |= text.contains("<filter");
         let tree = usvg::Tree::from_str(&text, &opt).map_err(|e| Error::animation(path, format!("SVG: {e}")))?;
         let s = (tree.size().width(), tree.size().height());
+        // Shapes drawn far outside the canvas cost unbounded work to stroke and fill (a
+        // circle scaled 2 000 000 times hangs the rasterizer; found by fuzzing).
+        let b = tree.root().abs_stroke_bounding_box();
+        let reach = [b.left(), b.top(), b.right(), b.bottom()].iter().fold(0f32, |m, v| m.max(v.abs()));
+        if reach.is_nan() || reach > MAX_REACH {
+            return Err(Error::Limit {
+                path: path.clone(),
+                what: "how far a shape reaches outside the canvas, pixels".into(),
+                value: reach as f64,
+                limit: MAX_REACH as f64,
+            });
+        }
         match size {
             None => {
                 if s.0 > MAX_SIDE as f32 || s.1 > MAX_SIDE as f32 {
@@ -263,16 +394,24 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
             what: "the SVG frames have no top-level groups or shapes to stylize".into(),
         });
     }
-    let width = ((w * options.scale).round() as u32).clamp(1, MAX_SIDE);
-    let height = ((h * options.scale).round() as u32).clamp(1, MAX_SIDE);
+    let (width, height) = super::scaled_canvas(input, w, h, options.scale)?;
     let mut warnings = Vec::new();
     if any_text {
         let msg = "SVG text is not rendered (no fonts are loaded); convert text to paths".to_string();
         log::warn!("{}: {msg}", input.display());
         warnings.push(msg);
     }
+    if any_filter {
+        let msg = "SVG filters (blur, shadows, …) are not drawn; ignored".to_string();
+        log::warn!("{}: {msg}", input.display());
+        warnings.push(msg);
+    }
     let names: Vec<String> = order.into_iter().rev().collect();
-    let regions = names
+    let frames = files.len();
+    let strokes = names.iter().map(|n| stroked.contains(n)).collect();
+    let renderer = SvgSequence { files, names, strokes, width, height, scale: (width as f32 / w, height as f32 / h) };
+    let regions = renderer
+        .names
         .iter()
         .enumerate()
         .map(|(i, name)| {
@@ -286,28 +425,24 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
                 index: i + 1,
                 name: name.clone(),
                 kind: if name == ROOT_LAYER { RegionKind::SvgRoot } else { RegionKind::SvgGroup },
+                // The dominant color of its first visible frame.
+                color: renderer.dominant_color(i, visible.start).unwrap_or([1.0, 1.0, 1.0, 1.0]),
                 visible,
-                color: [1.0, 1.0, 1.0, 1.0],
-                has_strokes: stroked.contains(name),
+                has_strokes: renderer.strokes[i],
                 warnings,
             }
         })
         .collect::<Vec<_>>();
-    let frames = files.len();
-    let strokes = names.iter().map(|n| stroked.contains(n)).collect();
-    let renderer = SvgSequence { files, names, strokes, width, height, scale: (width as f32 / w, height as f32 / h) };
-    let mut anim =
-        Animation::new(input.to_path_buf(), width, height, 24.0, frames, regions, None, warnings, Box::new(renderer));
-    // Dominant colors from the first visible frame of each region.
-    for i in 0..anim.regions.len() {
-        let f = anim.regions[i].visible.start;
-        if let Ok(fr) = anim.render(i, f) {
-            let mut hist = super::ColorHistogram::default();
-            hist.add(&fr.fill);
-            if let Some(c) = hist.dominant() {
-                anim.regions[i].color = c;
-            }
-        }
+    Ok(Animation::new(input.to_path_buf(), width, height, 24.0, frames, regions, None, warnings, Box::new(renderer)))
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn numbers_in_attributes() {
+        let v: Vec<f64> = super::numbers("M1e38L-2.5.5 3e", true).collect();
+        assert_eq!(v, [1e38, -2.5, 0.5, 3.0]);
+        let v: Vec<f64> = super::numbers("#1e9999 rgb(1,2e3,3) layer1e9 12", false).collect();
+        assert_eq!(v, [1.0, 2e3, 3.0, 12.0]);
     }
-    Ok(anim)
 }

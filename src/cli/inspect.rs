@@ -1,7 +1,7 @@
 //! `fluidymation inspect`: what is in an animation, and optionally its masks.
 
 use super::Ctx;
-use anyhow::{Context, bail};
+use anyhow::Context;
 use fluidymation::anim::{self, Animation, LoadOptions};
 use fluidymation::guide::preview::{PreviewOptions, write_previews};
 use fluidymation::guide::{GuideParams, GuideStream};
@@ -42,33 +42,19 @@ pub struct Args {
     pub split_precomps: bool,
 }
 
-/// Parses `A..B` (1-based, inclusive) into a 0-based half-open range within `0..total`.
-pub fn parse_frames(spec: &str, total: usize) -> anyhow::Result<Range<usize>> {
-    let spec = spec.trim();
-    let num = |s: &str, default: usize| -> anyhow::Result<usize> {
-        let s = s.trim();
-        if s.is_empty() {
-            return Ok(default);
-        }
-        s.parse::<usize>().with_context(|| format!("'{s}' is not a frame number"))
-    };
-    let (a, b) = match spec.split_once("..") {
-        Some((a, b)) => (num(a, 1)?, num(b.trim_start_matches('='), total)?),
-        None => {
-            let n = num(spec, 1)?;
-            (n, n)
-        }
-    };
-    if a == 0 || b == 0 {
-        bail!("--frames {spec}: frames are numbered from 1");
+/// Coverage is measured on at most this many frames spread over the range (all of them
+/// when masks are written): an `op` of 100 000 must not make `inspect` render every frame.
+pub const MAX_MEASURED_FRAMES: usize = 240;
+
+/// The frames of `range` whose coverage is measured: all when `all`, else at most
+/// [`MAX_MEASURED_FRAMES`] spread evenly (the first and the last included).
+fn sampled(range: &Range<usize>, all: bool) -> Vec<usize> {
+    let n = range.len();
+    if all || n <= MAX_MEASURED_FRAMES {
+        return range.clone().collect();
     }
-    if a > b {
-        bail!("--frames {spec}: the first frame is after the last");
-    }
-    if a > total {
-        bail!("--frames {spec}: the animation has only {total} frames");
-    }
-    Ok(a - 1..b.min(total))
+    let m = MAX_MEASURED_FRAMES;
+    (0..m).map(|k| range.start + k * (n - 1) / (m - 1)).collect()
 }
 
 fn hex(c: [f32; 4]) -> String {
@@ -85,18 +71,21 @@ struct Stats {
 }
 
 /// Renders every region over `range` (writing masks when asked) and measures coverage.
-fn measure(a: &Animation, range: &Range<usize>, masks: Option<&PathBuf>, ctx: &Ctx) -> anyhow::Result<Vec<Stats>> {
-    let jobs: Vec<(usize, usize)> = (0..a.regions.len()).flat_map(|r| range.clone().map(move |f| (r, f))).collect();
+fn measure(a: &Animation, frames: &[usize], masks: Option<&PathBuf>, ctx: &Ctx) -> anyhow::Result<Vec<Stats>> {
+    let jobs: Vec<(usize, usize)> = (0..a.regions.len()).flat_map(|r| frames.iter().map(move |&f| (r, f))).collect();
     if let Some(dir) = masks {
         for r in &a.regions {
             let d = dir.join(r.dir_name());
             std::fs::create_dir_all(&d).with_context(|| format!("could not create '{}'", d.display()))?;
         }
     }
-    let show = masks.is_some() && !ctx.quiet && std::io::stderr().is_terminal() && jobs.len() > 8;
+    let show = !ctx.quiet && std::io::stderr().is_terminal() && jobs.len() > 8;
     let bar = if show {
         let pb = indicatif::ProgressBar::new(jobs.len() as u64);
-        if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} masks {eta}") {
+        let what = if masks.is_some() { "masks" } else { "frames measured" };
+        if let Ok(style) =
+            indicatif::ProgressStyle::with_template(&format!("{{bar:40}} {{pos}}/{{len}} {what} {{eta}}"))
+        {
             pb.set_style(style);
         }
         Some(pb)
@@ -185,11 +174,10 @@ fn write_guides(a: &Animation, range: &Range<usize>, dir: &std::path::Path, ctx:
 pub fn run(args: Args, ctx: &Ctx) -> anyhow::Result<()> {
     let opts = LoadOptions { scale: args.scale, split_precomps: args.split_precomps };
     let a = anim::load(&args.input, &opts).with_context(|| format!("could not load '{}'", args.input.display()))?;
-    let range = match &args.frames {
-        Some(spec) => parse_frames(spec, a.frames)?,
-        None => 0..a.frames,
-    };
-    let stats = measure(&a, &range, args.masks.as_ref(), ctx)?;
+    let range = super::params::parse_frames(args.frames.as_deref(), a.frames)?;
+    super::params::warn_if_clipped(args.frames.as_deref(), &range, a.frames, "the input");
+    let measured = sampled(&range, args.masks.is_some());
+    let stats = measure(&a, &measured, args.masks.as_ref(), ctx)?;
     if let Some(dir) = &args.guides {
         write_guides(&a, &range, dir, ctx)?;
     }
@@ -219,7 +207,7 @@ pub fn run(args: Args, ctx: &Ctx) -> anyhow::Result<()> {
             "fps": a.fps,
             "frames": a.frames,
             "duration": a.duration(),
-            "measured_frames": {"first": range.start + 1, "last": range.end},
+            "measured_frames": {"first": range.start + 1, "last": range.end, "count": measured.len()},
             "background": a.background.as_ref().map(|b| serde_json::json!({"name": b.name, "color": hex(b.color)})),
             "regions": regions,
             "warnings": a.warnings,
@@ -241,8 +229,13 @@ pub fn run(args: Args, ctx: &Ctx) -> anyhow::Result<()> {
         Some(b) => writeln!(out, "  background: {} {}", hex(b.color), b.name)?,
         None => writeln!(out, "  background: none")?,
     }
-    if range != (0..a.frames) {
-        writeln!(out, "  measured frames {}", frames_label(&range))?;
+    if range != (0..a.frames) || measured.len() < range.len() {
+        let sample = if measured.len() < range.len() {
+            format!(" (coverage from {} of them, evenly spread; --masks measures all)", measured.len())
+        } else {
+            String::new()
+        };
+        writeln!(out, "  measured frames {}{sample}", frames_label(&range))?;
     }
     for w in &a.warnings {
         writeln!(out, "  warning: {w}")?;
@@ -287,15 +280,12 @@ mod tests {
     use super::*;
 
     #[test]
-    fn frame_ranges() {
-        assert_eq!(parse_frames("1..10", 48).unwrap(), 0..10);
-        assert_eq!(parse_frames("5", 48).unwrap(), 4..5);
-        assert_eq!(parse_frames("40..", 48).unwrap(), 39..48);
-        assert_eq!(parse_frames("..3", 48).unwrap(), 0..3);
-        assert_eq!(parse_frames("1..100", 48).unwrap(), 0..48);
-        assert!(parse_frames("0..3", 48).is_err());
-        assert!(parse_frames("9..3", 48).is_err());
-        assert!(parse_frames("60..70", 48).is_err());
-        assert!(parse_frames("x", 48).is_err());
+    fn long_ranges_are_sampled() {
+        assert_eq!(sampled(&(0..10), false), (0..10).collect::<Vec<_>>());
+        let s = sampled(&(5..100_005), false);
+        assert_eq!(s.len(), MAX_MEASURED_FRAMES);
+        assert_eq!((s[0], s[s.len() - 1]), (5, 100_004));
+        assert!(s.windows(2).all(|w| w[0] < w[1]));
+        assert_eq!(sampled(&(0..1000), true).len(), 1000);
     }
 }

@@ -211,7 +211,7 @@ pub fn parse_frames(spec: Option<&str>, total: usize) -> Result<std::ops::Range<
     let Some(spec) = spec else { return Ok(0..total) };
     let bad = || anyhow::anyhow!("--frames '{}': expected A..B (1-based, inclusive), e.g. 1..24", spec);
     let (a, b) = match spec.split_once("..") {
-        Some((a, b)) => (a.trim(), b.trim()),
+        Some((a, b)) => (a.trim(), b.trim().trim_start_matches('=').trim()),
         None => (spec.trim(), spec.trim()),
     };
     let a: usize = if a.is_empty() { 1 } else { a.parse().map_err(|_| bad())? };
@@ -223,6 +223,23 @@ pub fn parse_frames(spec: Option<&str>, total: usize) -> Result<std::ops::Range<
         bail!("--frames '{}': the input has only {} frames", spec, total);
     }
     Ok(a - 1..b.min(total))
+}
+
+/// Warns when `--frames` asked for frames past the input's last (`range` is what is used);
+/// `input` names the input in the warning ("the input", or a file of a batch).
+pub fn warn_if_clipped(spec: Option<&str>, range: &std::ops::Range<usize>, total: usize, input: &str) {
+    let end =
+        spec.and_then(|f| f.split_once("..")).and_then(|(_, b)| b.trim().trim_start_matches('=').parse::<usize>().ok());
+    if end.is_some_and(|end| end > total) {
+        log::warn!(
+            "--frames '{}': {} has only {} frames; using {}..{}",
+            spec.unwrap_or_default(),
+            input,
+            total,
+            range.start + 1,
+            range.end
+        );
+    }
 }
 
 /// Sets the global thread count.
@@ -248,6 +265,9 @@ mod tests {
         assert_eq!(parse_frames(Some("..100"), 10).unwrap(), 0..10);
         assert!(parse_frames(Some("0..3"), 10).is_err());
         assert!(parse_frames(Some("11..12"), 10).is_err());
+        assert_eq!(parse_frames(Some("2..=4"), 10).unwrap(), 1..4);
+        assert!(parse_frames(Some("x"), 10).is_err());
+        assert!(parse_frames(Some("9..3"), 10).is_err());
         assert!(parse_frames(Some("x"), 10).is_err());
     }
 

@@ -2,7 +2,7 @@
 //! batch; and the options it shares with `plan`, `render-layer` and `composite`.
 
 use super::Ctx;
-use super::params::{SynthFlags, parse_frames, set_threads};
+use super::params::{SynthFlags, parse_frames, set_threads, warn_if_clipped};
 use anyhow::{Context, Result, bail};
 use fluidymation::anim::{self, Animation, LoadOptions};
 use fluidymation::composite::{Recolor, StrokeMode};
@@ -300,19 +300,7 @@ pub fn file_options(
     styles: Option<&Styles>,
 ) -> Result<RenderOptions> {
     let frames = parse_frames(args.frames.as_deref(), anim.frames)?;
-    if let Some(end) =
-        args.frames.as_deref().and_then(|f| f.split_once("..")).and_then(|(_, b)| b.trim().parse::<usize>().ok())
-        && end > anim.frames
-    {
-        log::warn!(
-            "--frames '{}': '{}' has only {} frames; rendering {}..{}",
-            args.frames.as_deref().unwrap_or_default(),
-            input.display(),
-            anim.frames,
-            frames.start + 1,
-            frames.end
-        );
-    }
+    warn_if_clipped(args.frames.as_deref(), &frames, anim.frames, &format!("'{}'", input.display()));
     let mut opts = RenderOptions::new(out_dir, frames);
     if let Some(s) = styles {
         opts.default_style = s.default.clone();

@@ -1,7 +1,7 @@
 //! `fluidymation synth`: the engine on a plain mask sequence, as the thesis's program ran.
 
 use super::Ctx;
-use super::params::{SynthFlags, parse_frames, set_threads};
+use super::params::{SynthFlags, parse_frames, set_threads, warn_if_clipped};
 use super::progress::Bars;
 use anyhow::{Context, Result, bail};
 use fluidymation::anim::{self, LoadOptions};
@@ -46,6 +46,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     let anim = anim::load(&args.masks, &LoadOptions { scale: params.target_scale(), ..Default::default() })
         .with_context(|| format!("could not read the masks in '{}'", args.masks.display()))?;
     let range = parse_frames(args.frames.as_deref(), anim.frames)?;
+    warn_if_clipped(args.frames.as_deref(), &range, anim.frames, "the input");
     for dir in std::iter::once(&args.output).chain(args.debug.as_ref()) {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("could not create the output directory '{}'", dir.display()))?;

@@ -131,7 +131,7 @@ pub(crate) struct FileBytes {
 }
 
 fn decode(f: &FileBytes) -> Result<image::DynamicImage> {
-    image::load_from_memory(&f.bytes).map_err(|e| Error::image(&f.path, e))
+    img::decode(&f.bytes, &f.path, MAX_SIDE as u32)
 }
 
 fn decode_rgb(f: &FileBytes) -> Result<Plane<Rgb>> {

@@ -235,6 +235,27 @@ impl FrameGuides {
         FrameGuides { mask, dist: crate::img::downsample2(&self.dist), flow, ext_pos, ext_neg }
     }
 
+    /// Checks that every channel has the mask's size (and that it is not empty), as every
+    /// consumer of guides assumes; `what` names the guides in the error.
+    pub fn check(&self, what: &str) -> Result<()> {
+        let size = self.mask.size();
+        let sizes = [
+            ("dist", self.dist.size()),
+            ("flow", self.flow.size()),
+            ("ext_pos", self.ext_pos.size()),
+            ("ext_neg", self.ext_neg.size()),
+        ];
+        match sizes.iter().find(|(_, s)| *s != size) {
+            Some((name, s)) => Err(Error::param(
+                what,
+                format!("mask {}x{}, {name} {}x{}", size.0, size.1, s.0, s.1),
+                "every channel of the size of the mask",
+            )),
+            None if size.0 == 0 || size.1 == 0 => Err(Error::param(what, "0 pixels", "at least 1x1 pixels")),
+            None => Ok(()),
+        }
+    }
+
     /// `levels` pyramid levels, finest (this frame's resolution) first; `levels = 0` gives none.
     pub fn pyramid(&self, levels: usize) -> Vec<FrameGuides> {
         let mut out: Vec<FrameGuides> = Vec::with_capacity(levels);

@@ -37,10 +37,53 @@ pub fn atomic_write(path: &Path, write: impl FnOnce(&mut dyn Write) -> std::io::
     }
 }
 
-fn open(path: &Path) -> Result<image::DynamicImage> {
-    let reader = image::ImageReader::open(path).map_err(|e| Error::io(path, e))?;
-    let reader = reader.with_guessed_format().map_err(|e| Error::io(path, e))?;
+/// Largest image side decoded, pixels (the largest canvas, [`crate::anim::MAX_SIDE`]).
+pub const MAX_IMAGE_SIDE: u32 = crate::anim::MAX_SIDE;
+
+/// Most bytes a decoder may allocate for one image.
+const MAX_DECODE_BYTES: u64 = 1 << 30;
+
+/// Decodes an image held in memory (`path` names it in errors). Its header is read first: a
+/// side over `max_side`, or a PNG too short to hold the pixels its header claims (deflate
+/// compresses at most ~1032:1), is refused before any pixel buffer is allocated.
+pub fn decode(bytes: &[u8], path: &Path, max_side: u32) -> Result<image::DynamicImage> {
+    let reader =
+        image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format().map_err(|e| Error::io(path, e))?;
+    let format = reader.format();
+    let (w, h) = reader.into_dimensions().map_err(|e| Error::image(path, e))?;
+    if w.max(h) > max_side {
+        return Err(Error::Limit {
+            path: path.to_path_buf(),
+            what: format!("image side ({w}x{h})"),
+            value: w.max(h) as f64,
+            limit: max_side as f64,
+        });
+    }
+    // The smallest PNG of w × h pixels: 1 bit a pixel and a filter byte a row, at deflate's
+    // best ratio.
+    let least = h as u64 * (1 + (w as u64).div_ceil(8)) / 1100;
+    if format == Some(image::ImageFormat::Png) && (bytes.len() as u64) < least {
+        return Err(Error::image(
+            path,
+            format!(
+                "its header claims {w}x{h} pixels but the file has only {} bytes: it is truncated or damaged",
+                bytes.len()
+            ),
+        ));
+    }
+    let mut reader =
+        image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format().map_err(|e| Error::io(path, e))?;
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(max_side);
+    limits.max_image_height = Some(max_side);
+    limits.max_alloc = Some(MAX_DECODE_BYTES);
+    reader.limits(limits);
     reader.decode().map_err(|e| Error::image(path, e))
+}
+
+fn open(path: &Path) -> Result<image::DynamicImage> {
+    let bytes = fs::read(path).map_err(|e| Error::io(path, e))?;
+    decode(&bytes, path, MAX_IMAGE_SIDE)
 }
 
 #[inline]
@@ -146,6 +189,19 @@ mod tests {
         assert_eq!(fs::read_dir(&dir).unwrap().count(), 1);
         let g = load_gray(&f).unwrap(); // opaque RGBA -> luminance
         assert!(g.get(0, 0) < 0.3);
+        // A header claiming a huge image over a few bytes is refused before decoding.
+        let mut png = fs::read(&f).unwrap();
+        let ihdr = |png: &mut Vec<u8>, size: [u8; 8]| {
+            png[16..24].copy_from_slice(&size);
+            let crc = crc32fast::hash(&png[12..29]);
+            png[29..33].copy_from_slice(&crc.to_be_bytes());
+        };
+        ihdr(&mut png, [0, 0, 0x40, 0, 0, 0, 0x40, 0]); // 16384 x 16384
+        let e = decode(&png, &f, MAX_IMAGE_SIDE).unwrap_err().to_string();
+        assert!(e.contains("16384x16384") && e.contains("truncated or damaged"), "{e}");
+        ihdr(&mut png, [0, 0, 0x40, 1, 0, 0, 0, 5]);
+        let e = decode(&png, &f, MAX_IMAGE_SIDE).unwrap_err().to_string();
+        assert!(e.contains("16385x5") && e.contains("at most 16384"), "{e}");
         fs::remove_dir_all(&dir).unwrap();
     }
 }

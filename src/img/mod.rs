@@ -11,7 +11,8 @@ mod resample;
 
 pub use blur::{gaussian_blur, gaussian_kernel};
 pub use io::{
-    atomic_write, load_gray, load_rgb, load_rgba, save_gray, save_mask, save_rgb, save_rgba, write_png_rgba8,
+    MAX_IMAGE_SIDE, atomic_write, decode, load_gray, load_rgb, load_rgba, save_gray, save_mask, save_rgb, save_rgba,
+    write_png_rgba8,
 };
 pub use resample::{downsample2, resize_bilinear, sample_bilinear};
 

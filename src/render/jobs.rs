@@ -7,17 +7,19 @@
 //! A layer job writes into `OUT_DIR/layers/NN_name/`:
 //! - `paint/NNNN.png`: every frame of the layer painted in the exemplar's colors
 //!   ([`Paint`], 16-bit RGBA, alpha = the synthesized mask);
-//! - `.fluidymation/`: its checkpoints while it runs — a job that is run again (after its
-//!   machine died, say) continues from the last frame it completed;
-//! - [`LAYER_MANIFEST`], written last: the job is complete, and with which options;
+//! - `.fluidymation/`: its checkpoints while it runs ([`crate::resume`], checked like a
+//!   render's) — a job that is run again (after its machine died, say) continues from the last
+//!   frame it completed, and starts over when they fail their checks;
+//! - [`LAYER_MANIFEST`], written last: the job is complete, with which options, and the size
+//!   and CRC-32 of every painted frame, which the composite and a second run check;
 //! - `.lock`: held while the job runs, so that two runs of one job never write at once (the
 //!   second waits for the first and finds its work done).
 
 use super::paint::Paint;
 use super::{
-    Layer, Prepared, RenderOptions, RenderSummary, STATE_DIR, StyleCache, background, fnv, frame_range, next_frame,
-    prepare, prepare_outputs, read_progress, recolor_paint, resolve_styles, restore, save_state, stage_name,
-    start_layer, target_fill, write_composite, write_gif, write_progress,
+    Layer, Prepared, RenderOptions, RenderSummary, STATE_DIR, StyleCache, background, frame_range, layer_states,
+    next_frame, prepare, prepare_outputs, recolor_paint, resolve_styles, restore, stage_name, start_layer, target_fill,
+    verified, write_composite, write_gif,
 };
 use crate::anim::{Animation, RegionFrame};
 use crate::composite::{Pigment, StylizedLayer};
@@ -25,6 +27,7 @@ use crate::error::{Error, Result};
 use crate::img;
 use crate::output;
 use crate::progress::Progress;
+use crate::resume::{self, FileRecord, Journal, Remedy};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -37,7 +40,7 @@ pub const LAYER_MANIFEST: &str = "layer.json";
 /// The folder of a layer's painted frames, inside its layer folder.
 pub const PAINT_DIR: &str = "paint";
 
-const MANIFEST_FORMAT: u32 = 1;
+const MANIFEST_FORMAT: u32 = 2;
 
 #[derive(serde::Serialize, serde::Deserialize)]
 struct Manifest {
@@ -49,6 +52,35 @@ struct Manifest {
     /// First and last frame, 1-based.
     frames: [usize; 2],
     fingerprint: String,
+    /// Every painted frame, as written.
+    files: Vec<PaintedFile>,
+}
+
+/// One painted frame in the manifest: its place in the range (0-based), its path in the
+/// layer folder, its size and CRC-32 (hex).
+#[derive(serde::Serialize, serde::Deserialize)]
+struct PaintedFile {
+    frame: usize,
+    path: String,
+    size: u64,
+    crc: String,
+}
+
+impl Manifest {
+    /// The painted frames as records; an error when one is malformed.
+    fn records(&self, path: &Path) -> Result<Vec<FileRecord>> {
+        self.files
+            .iter()
+            .map(|f| {
+                let crc = u32::from_str_radix(&f.crc, 16).ok();
+                let line = format!("{} {} {:08x} {}", f.frame, f.size, crc.unwrap_or_default(), f.path);
+                crc.and_then(|_| FileRecord::parse(&line)).ok_or_else(|| Error::Corrupt {
+                    path: path.to_path_buf(),
+                    message: format!("the record of the painted frame '{}' is malformed", f.path),
+                })
+            })
+            .collect()
+    }
 }
 
 /// What a layer job did.
@@ -71,15 +103,16 @@ pub struct LayerJobSummary {
 }
 
 /// Everything that decides a layer's painted frames, as one number: the composite checks
-/// that the layers it reads were painted with its own options.
-fn layer_fingerprint(anim: &Animation, opts: &RenderOptions, region: usize, style: &str) -> String {
-    let input = std::fs::canonicalize(&anim.path).unwrap_or_else(|_| anim.path.clone());
+/// that the layers it reads were painted with its own options. `input` is the
+/// [`resume::input_digest`] of the animation: the same content gives the same fingerprint
+/// wherever it lies (on another machine of a farm, say).
+fn layer_fingerprint(anim: &Animation, opts: &RenderOptions, input: u64, region: usize, style: &str) -> String {
     let r = &anim.regions[region];
     format!(
         "{:016x}",
-        fnv(&format!(
-            "layer|{}|{:?}|{}|{}|{}|{:?}|{:?}|{:?}|{}|{}x{}x{}",
-            input.display(),
+        resume::fingerprint(&format!(
+            "layer|{:016x}|{:?}|{}|{}|{}|{:?}|{:?}|{:?}|{}|{}x{}x{}",
+            input,
             opts.frames.start.min(anim.frames)..opts.frames.end.min(anim.frames),
             r.index,
             r.name,
@@ -132,8 +165,9 @@ fn lock(dir: &Path) -> Result<std::fs::File> {
 /// into `opts.out_dir/layers/NN_name/`: `paint/NNNN.png` ([`Paint`]), checkpoints in
 /// `.fluidymation/` while it runs, [`LAYER_MANIFEST`] when complete, and a `.lock` held while
 /// it runs (a second run of the same job waits for the first). A complete job with the same
-/// options is not done again; an interrupted one continues from its last checkpoint; one made
-/// with other options is started over.
+/// options whose painted frames are as it wrote them is not done again; an interrupted one
+/// continues from its last checkpoint when the checkpoint and the frames painted so far pass
+/// their checks; any other is started over (with a warning when something was damaged).
 ///
 /// Only the options that decide the painting are used: input, frames, scale, styles, strokes,
 /// exemplar folders and engine parameters ([`RenderOptions::gif`], `background`, `recolor`
@@ -171,65 +205,76 @@ pub fn render_layer(
     };
     output::prepare_dir(&dir)?;
     let _lock = lock(&dir)?;
-    let fingerprint = layer_fingerprint(anim, opts, region, &style);
+    let fingerprint = layer_fingerprint(anim, opts, resume::input_digest(&anim.path)?, region, &style);
     let paint_dir = dir.join(PAINT_DIR);
     let frame_file = |k: usize| output::frame_path(&paint_dir, range.start + k, anim.frames);
     let manifest_path = dir.join(LAYER_MANIFEST);
-    if read_manifest(&manifest_path).is_ok_and(|m| m.fingerprint == fingerprint)
-        && (0..n).all(|k| frame_file(k).is_file())
+    if let Ok(m) = read_manifest(&manifest_path)
+        && m.fingerprint == fingerprint
     {
-        summary.resumed = n;
-        summary.seconds = start.elapsed().as_secs_f64();
-        return Ok(summary);
+        let records = m.records(&manifest_path).unwrap_or_default();
+        let damage: Vec<_> = records.iter().filter_map(|r| r.check(&dir)).collect();
+        if damage.is_empty() && (0..n).all(|k| records.iter().any(|f| f.frame == k)) {
+            summary.resumed = n;
+            summary.seconds = start.elapsed().as_secs_f64();
+            return Ok(summary);
+        }
+        for d in &damage {
+            log::warn!("'{}' {}", d.path.display(), d.what);
+        }
+        log::warn!("layer {:02} '{}': painted frames were changed or removed; painting it again", r.index, r.name);
     }
     let Prepared { region_style, styles, .. } = prepare(anim, opts, &range, Some(region), &StyleCache::new())?;
     let st = &styles[region_style[region].expect("a stylized region is prepared")];
 
-    // The checkpoints: continue when they were made with the same options and their frames
-    // are all there, else start over.
-    let state_dir = dir.join(STATE_DIR);
+    // The checkpoints: continue when they were made with the same options and they and the
+    // frames painted so far pass their checks, else start over.
     let state_fingerprint = u64::from_str_radix(&fingerprint, 16).unwrap_or_default();
-    let mut done = read_progress(&dir, state_fingerprint).map(|d| d.min(n)).unwrap_or(0);
-    if !(0..done).all(|k| frame_file(k).is_file()) {
-        done = 0;
-    }
+    let resumed = match Journal::open(&dir, state_fingerprint, n, Remedy::StartOver) {
+        Ok((journal, done)) => {
+            verified(&journal, "painting the layer again from its first frame").then_some((journal, done))
+        }
+        Err(Error::Empty { .. }) => None,
+        Err(e @ Error::Corrupt { .. }) => {
+            log::warn!("layer {:02} '{}': {e}", r.index, r.name);
+            None
+        }
+        Err(e) => return Err(e),
+    };
     if manifest_path.exists() {
         std::fs::remove_file(&manifest_path).map_err(|e| Error::io(&manifest_path, e))?;
     }
-    if done == 0 {
-        for d in [&paint_dir, &state_dir] {
-            if d.exists() {
-                std::fs::remove_dir_all(d).map_err(|e| Error::io(d, e))?;
+    let stages = [stage_name(anim, region)];
+    let start_over = || -> Result<(Journal, Vec<Layer>)> {
+        if paint_dir.exists() {
+            std::fs::remove_dir_all(&paint_dir).map_err(|e| Error::io(&paint_dir, e))?;
+        }
+        let journal = Journal::create(&dir, state_fingerprint, n, Remedy::StartOver)?;
+        Ok((journal, vec![new_layer(anim, opts, region, &range, st, region_style[region])?]))
+    };
+    let (mut journal, mut layers, done) = match resumed {
+        Some((journal, done)) => {
+            let mut layers = vec![new_layer(anim, opts, region, &range, st, region_style[region])?];
+            match restore(&journal, done, &mut layers, &stages) {
+                Ok(()) => (journal, layers, done),
+                Err(e @ Error::Corrupt { .. }) => {
+                    log::warn!("layer {:02} '{}': {e}", r.index, r.name);
+                    let (journal, layers) = start_over()?;
+                    (journal, layers, 0)
+                }
+                Err(e) => return Err(e),
             }
         }
-    }
+        None => {
+            let (journal, layers) = start_over()?;
+            (journal, layers, 0)
+        }
+    };
     output::prepare_dir(&paint_dir)?;
     output::remove_stale_temporaries(&paint_dir, None);
     output::remove_stale_temporaries(&dir, None);
-    output::remove_stale_temporaries(&state_dir, None);
-    std::fs::create_dir_all(&state_dir).map_err(|e| Error::io(&state_dir, e))?;
-    if done == 0 {
-        write_progress(&state_dir, state_fingerprint, 0)?;
-    }
+    output::remove_stale_temporaries(&dir.join(STATE_DIR), None);
 
-    let (synth, guides) = start_layer(anim, opts, region, &range, st)?;
-    let mut layers = vec![Layer {
-        region,
-        style: region_style[region],
-        synth: Some(synth),
-        guides: Some(guides),
-        seconds: 0.0,
-        kept: Vec::new(),
-    }];
-    let stages = [stage_name(anim, region)];
-    if done > 0 {
-        restore(&state_dir, done, &mut layers, &stages)?;
-        if let Some(g) = layers[0].guides.as_mut() {
-            for _ in 0..done {
-                g.next().transpose()?;
-            }
-        }
-    }
     if !progress.update(&stages[0], done, n) {
         return Err(Error::Cancelled);
     }
@@ -238,12 +283,19 @@ pub fn render_layer(
         let l = &mut layers[0];
         let (Some(synth), Some(guides)) = (l.synth.as_mut(), l.guides.as_mut()) else { unreachable!() };
         let out = next_frame(anim, synth, guides, frame)?;
-        Paint::from_frame(&out.rgb, &out.mask).save(&frame_file(k))?;
-        save_state(&state_dir, state_fingerprint, k + 1, &layers, &stages)?;
+        let path = frame_file(k);
+        Paint::from_frame(&out.rgb, &out.mask).save(&path)?;
+        journal.record(k, &path)?;
+        journal.commit(k + 1, &layer_states(&layers, &stages))?;
         if !progress.update(&stages[0], k + 1, n) {
             return Err(Error::Cancelled);
         }
     }
+    let files = journal
+        .records()
+        .iter()
+        .map(|f| PaintedFile { frame: f.frame, path: f.path.clone(), size: f.size, crc: format!("{:08x}", f.crc) })
+        .collect();
     let manifest = Manifest {
         format: MANIFEST_FORMAT,
         input: std::fs::canonicalize(&anim.path).unwrap_or_else(|_| anim.path.clone()),
@@ -252,14 +304,29 @@ pub fn render_layer(
         exemplar: style,
         frames: [range.start + 1, range.end],
         fingerprint,
+        files,
     };
     let text = serde_json::to_string_pretty(&manifest).expect("a manifest serializes");
     img::atomic_write(&manifest_path, |w| w.write_all(format!("{text}\n").as_bytes()))?;
-    std::fs::remove_dir_all(&state_dir).map_err(|e| Error::io(&state_dir, e))?;
+    // The manifest holds the records now.
+    journal.remove()?;
     summary.painted = n - done;
     summary.resumed = done;
     summary.seconds = start.elapsed().as_secs_f64();
     Ok(summary)
+}
+
+/// A new layer of a render-layer job: its synthesizer and guide stream.
+fn new_layer(
+    anim: &Animation,
+    opts: &RenderOptions,
+    region: usize,
+    range: &std::ops::Range<usize>,
+    st: &super::Style,
+    style: Option<usize>,
+) -> Result<Layer> {
+    let (synth, guides) = start_layer(anim, opts, region, range, st)?;
+    Ok(Layer { region, style, synth: Some(synth), guides: Some(guides), seconds: 0.0, kept: Vec::new() })
 }
 
 /// Recolors and composites the layers that [`render_layer`] painted into
@@ -273,6 +340,8 @@ pub fn composite(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress
     let background = background(anim, opts)?;
     let styles_of = resolve_styles(anim, opts)?;
     let cache = StyleCache::new();
+    let n = range.len();
+    let input = resume::input_digest(&anim.path)?;
     let pigments: Vec<Option<Pigment>> = styles_of
         .iter()
         .enumerate()
@@ -291,7 +360,7 @@ pub fn composite(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress
                 },
                 other => other,
             })?;
-            if manifest.fingerprint != layer_fingerprint(anim, opts, region, style) {
+            if manifest.fingerprint != layer_fingerprint(anim, opts, input, region, style) {
                 return Err(Error::Corrupt {
                     path,
                     message: format!(
@@ -302,12 +371,30 @@ pub fn composite(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress
                     ),
                 });
             }
+            // Every painted frame must be as the job wrote it.
+            let records = manifest.records(&path)?;
+            for k in 0..n {
+                let file = output::frame_path(&dir.join(PAINT_DIR), range.start + k, anim.frames);
+                let rel = format!("{PAINT_DIR}/{}", file.file_name().unwrap_or_default().to_string_lossy());
+                let what = match records.iter().find(|f| f.frame == k && f.path == rel) {
+                    None => Some("was never recorded by the job".to_string()),
+                    Some(record) => record.check(&dir).map(|d| d.what),
+                };
+                if let Some(what) = what {
+                    return Err(Error::Corrupt {
+                        path: file,
+                        message: format!(
+                            "layer {:02} '{}': this painted frame {what}; run its render-layer job again",
+                            r.index, r.name
+                        ),
+                    });
+                }
+            }
             Ok(Some(Pigment::from_exemplar(&cache.exemplar(style, &opts.exemplar_dirs)?)))
         })
         .collect::<Result<_>>()?;
     let layer_dirs = prepare_outputs(anim, opts)?;
     let (w, h) = (anim.width as usize, anim.height as usize);
-    let n = range.len();
     let finished = AtomicUsize::new(0);
     if !progress.update("frames", 0, n) {
         return Err(Error::Cancelled);

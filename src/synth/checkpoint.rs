@@ -5,6 +5,7 @@
 use super::nnf::{Match, Nnf};
 use super::{PrevState, Synthesizer};
 use crate::error::{Error, Result};
+use crate::guide::FrameGuides;
 use std::path::Path;
 
 const MAGIC: &[u8; 8] = b"FMSYNTH4";
@@ -120,11 +121,21 @@ impl Synthesizer {
         let limit = 1 << 28;
         let trunc = || bad("truncated");
         let frame = r.u64().ok_or_else(trunc)? as usize;
-        let sw = r.len(limit).ok_or_else(trunc)?;
-        let sh = r.len(limit).ok_or_else(trunc)?;
+        let sw = r.u64().ok_or_else(trunc)? as usize;
+        let sh = r.u64().ok_or_else(trunc)? as usize;
+        if sw.max(sh) > crate::anim::MAX_SIDE as usize {
+            return Err(bad(&format!("the target size {sw}x{sh} is impossible")));
+        }
         let ext_factor = r.f32().ok_or_else(trunc)?;
         if !(ext_factor.is_nan() || (ext_factor > 0.0 && ext_factor <= 1.0)) {
             return Err(bad("the extent factor is not in (0, 1]"));
+        }
+        // Known from the whole target (Synthesizer::set_target_extent): it must agree.
+        if let Some(e_t) = self.target_extent
+            && !ext_factor.is_nan()
+            && ext_factor != self.extent_factor_for(e_t)
+        {
+            return Err(bad("the extent factor does not match the target's motion"));
         }
         let prev = match r.u64().ok_or_else(trunc)? {
             0 => None,
@@ -133,6 +144,12 @@ impl Synthesizer {
                 let oy = r.len(1 << 16).ok_or_else(trunc)?;
                 let w = r.len(1 << 16).ok_or_else(trunc)?;
                 let h = r.len(1 << 16).ok_or_else(trunc)?;
+                // Before anything of that size is allocated.
+                if w == 0 || h == 0 || ox.saturating_add(w) > sw || oy.saturating_add(h) > sh {
+                    return Err(bad(&format!(
+                        "the previous frame's window {w}x{h} at ({ox}, {oy}) does not fit the {sw}x{sh} frame"
+                    )));
+                }
                 let n = r.len(limit).ok_or_else(trunc)?;
                 let ok = unpack_bits(r.take(n).ok_or_else(trunc)?, w * h).ok_or_else(|| bad("inconsistent sizes"))?;
                 let mut nnf = Nnf::new(w, h);
@@ -159,12 +176,13 @@ impl Synthesizer {
                     };
                     *e = v[5];
                     *f = glam::Vec2::new(v[6], v[7]);
-                    if !(f.is_finite() && e.is_finite()) {
-                        return Err(bad("a motion value is not a number"));
+                    if !(f.is_finite() && f.length() <= crate::anim::MAX_SIDE as f32) {
+                        return Err(bad(&format!("a flow value ({}, {}) is impossible", f.x, f.y)));
                     }
-                    if m.i as usize >= self.source.frames() || !(m.x.is_finite() && m.y.is_finite()) {
-                        return Err(bad("a match points outside the exemplar"));
+                    if rest[2] > 1 {
+                        return Err(bad("a match's flip flag is neither 0 nor 1"));
                     }
+                    self.check_match(m, *e).map_err(|what| bad(&what))?;
                 }
                 let levels = r.len(32).ok_or_else(trunc)?;
                 let mut masks = Vec::with_capacity(levels);
@@ -180,10 +198,119 @@ impl Synthesizer {
         if r.pos != data.len() {
             return Err(bad("trailing data"));
         }
+        self.check_sizes(frame, (sw, sh), prev.as_ref()).map_err(|what| bad(&what))?;
         self.frame = frame;
         self.size = (sw > 0).then_some((sw, sh));
         self.prev = prev;
         self.ext_factor = (!ext_factor.is_nan()).then_some(ext_factor);
+        Ok(())
+    }
+}
+
+/// Largest |c² + s² − 1| of a loaded rotation (saved rotations are unit up to rounding).
+const ROTATION_TOLERANCE: f32 = 1e-3;
+
+impl Synthesizer {
+    /// The size of the target frames seen so far (`None` before the first frame).
+    pub fn target_size(&self) -> Option<(usize, usize)> {
+        self.size
+    }
+
+    /// A loaded match must address the exemplar: frame `i` among its frames, the center
+    /// inside the finest level (where the time shift and the kernels read it; the margin is
+    /// restored by `sanitize` before a search), a rotation `(c, s)` with c² + s² ≈ 1, and a
+    /// finite, non-negative `T^ext+`. The error is recomputed before any use, so it is not checked.
+    fn check_match(&self, m: &Match, ext: f32) -> std::result::Result<(), String> {
+        let src = &self.source.pyramid.levels[0];
+        if m.i as usize >= src.frames {
+            return Err(format!("a match points to exemplar frame {} of {}", m.i as usize + 1, src.frames));
+        }
+        let inside = |v: f32, n: usize| v.is_finite() && v >= 0.0 && v <= (n - 1) as f32;
+        if !(inside(m.x, src.w) && inside(m.y, src.h)) {
+            return Err(format!("a match points to ({}, {}), outside the {}x{} exemplar", m.x, m.y, src.w, src.h));
+        }
+        let off = (m.c * m.c + m.s * m.s - 1.0).abs();
+        if off.is_nan() || off > ROTATION_TOLERANCE {
+            return Err(format!("a match's rotation ({}, {}) is not a rotation", m.c, m.s));
+        }
+        if !(ext.is_finite() && ext >= 0.0) {
+            return Err(format!("a motion extent is {ext}"));
+        }
+        Ok(())
+    }
+
+    /// The sizes of a loaded state must fit each other: the previous frame's window inside
+    /// the frame, its corner aligned like the windows [`Synthesizer::step`] makes, and one
+    /// mask per pyramid level of the window's size.
+    fn check_sizes(
+        &self,
+        frame: usize,
+        (sw, sh): (usize, usize),
+        prev: Option<&PrevState>,
+    ) -> std::result::Result<(), String> {
+        let max = crate::anim::MAX_SIDE as usize;
+        if sw > max || sh > max || (sw == 0) != (sh == 0) {
+            return Err(format!("the target size {sw}x{sh} is impossible"));
+        }
+        if frame == 0 && (sw > 0 || prev.is_some()) {
+            return Err("it holds a previous frame but no frame was done".into());
+        }
+        let Some(p) = prev else { return Ok(()) };
+        if sw == 0 {
+            return Err("it holds a previous frame but no target size".into());
+        }
+        let (w, h) = (p.nnf0.w, p.nnf0.h);
+        let levels = self.level_count(sw, sh);
+        let align = 1 << (levels - 1);
+        if w == 0 || h == 0 || p.origin.0 + w > sw || p.origin.1 + h > sh {
+            return Err(format!(
+                "the previous frame's window {}x{} at ({}, {}) does not fit the {sw}x{sh} frame",
+                w, h, p.origin.0, p.origin.1
+            ));
+        }
+        if p.origin.0 % align != 0 || p.origin.1 % align != 0 {
+            return Err(format!("the previous frame's window corner is not a multiple of {align}"));
+        }
+        if p.masks.len() != levels {
+            return Err(format!("{} mask levels where the frame has {levels}", p.masks.len()));
+        }
+        for (l, m) in p.masks.iter().enumerate() {
+            let (lw, lh) = (w.div_ceil(1 << l), h.div_ceil(1 << l));
+            if m.len() != lw * lh {
+                return Err(format!("mask level {l} holds {} pixels, not {lw}x{lh}", m.len()));
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks a restored state against the guides of the frame it was saved after (the
+    /// previous frame of the next [`Synthesizer::step`]): the saved window must be the one
+    /// that frame's mask gives, and the frames must have the same size. `None` when no frame
+    /// was done. `path` names the state in errors.
+    pub fn check_resumed(&self, previous: Option<&FrameGuides>, path: &Path) -> Result<()> {
+        let bad = |what: String| Error::Corrupt {
+            path: path.to_path_buf(),
+            message: format!("checkpoint does not belong to this render: {what}"),
+        };
+        let Some(g) = previous else {
+            return match self.frame {
+                0 => Ok(()),
+                n => Err(bad(format!("it was saved after frame {n}, but this render has done none"))),
+            };
+        };
+        let size = g.mask.size();
+        if self.size != Some(size) {
+            let (w, h) = self.size.unwrap_or((0, 0));
+            return Err(bad(format!("it was saved for {w}x{h} frames, this render's are {}x{}", size.0, size.1)));
+        }
+        let levels = self.level_count(size.0, size.1);
+        let expected = super::window(&g.mask, 1 << (levels - 1));
+        let saved = self.prev.as_ref().map(|p| (p.origin.0, p.origin.1, p.nnf0.w, p.nnf0.h));
+        if expected != saved {
+            return Err(bad(format!(
+                "its working window {saved:?} is not the one of the previous frame's mask {expected:?}"
+            )));
+        }
         Ok(())
     }
 }

@@ -115,6 +115,7 @@ impl Source {
     /// Prepares an exemplar with `params` (its scale, speed and border width default to the
     /// exemplar's recommendations). Guides are computed after resampling.
     pub fn prepare(ex: &Exemplar, params: &Params) -> Result<Source> {
+        ex.validate()?;
         let scale = params.src_scale.unwrap_or(ex.meta.scale);
         let speed = params.src_speed.unwrap_or(ex.meta.speed).max(1);
         let (frames, masks) = resample_exemplar(ex, scale, speed);
@@ -143,6 +144,16 @@ impl Source {
             return Err(Error::param("exemplar frames", frames.len(), "at most 65535"));
         }
         let (w, h) = frames[0].size();
+        for (k, (f, g)) in frames.iter().zip(guides).enumerate() {
+            g.check("exemplar guides")?;
+            if f.size() != (w, h) || g.size() != (w, h) {
+                return Err(Error::param(
+                    "exemplar frames",
+                    format!("frame {} {}x{} with guides {}x{}", k + 1, f.width(), f.height(), g.size().0, g.size().1),
+                    format!("{w}x{h} like frame 1, and guides of the same size"),
+                ));
+            }
+        }
         if w < 2 * MARGIN + 2 || h < 2 * MARGIN + 2 {
             return Err(Error::param("exemplar size", format!("{}x{}", w, h), "at least 8x8 pixels"));
         }
@@ -336,6 +347,12 @@ impl Synthesizer {
         self.ext_factor
     }
 
+    /// `k = min(1, E_S / E_T)` for a target extent scale `E_T` (1 when normalization is off).
+    pub(crate) fn extent_factor_for(&self, e_t: f32) -> f32 {
+        let e_s = self.source.pyramid.ext_scale;
+        if self.params.ext_normalize && e_t > e_s && e_t > 0.0 { e_s / e_t } else { 1.0 }
+    }
+
     /// Also produce [`DebugViews`] with every frame.
     pub fn set_debug(&mut self, on: bool) {
         self.debug = on;
@@ -355,6 +372,7 @@ impl Synthesizer {
     /// Synthesizes the next frame from its guides (frames must come in order and all have
     /// the same size).
     pub fn step(&mut self, g: &FrameGuides) -> Result<SynthFrame> {
+        g.check("target guides")?;
         let (w, h) = g.mask.size();
         if let Some(size) = self.size
             && size != (w, h)
@@ -386,11 +404,13 @@ impl Synthesizer {
         };
         let full = g;
         let mut cropped = crop_guides(g, win);
-        let k = *self.ext_factor.get_or_insert_with(|| {
-            let e_t = self.target_extent.unwrap_or_else(|| crate::guide::extent_scale(std::slice::from_ref(g)));
-            let e_s = self.source.pyramid.ext_scale;
-            if self.params.ext_normalize && e_t > e_s && e_t > 0.0 { e_s / e_t } else { 1.0 }
-        });
+        let k = match self.ext_factor {
+            Some(k) => k,
+            None => {
+                let e_t = self.target_extent.unwrap_or_else(|| crate::guide::extent_scale(std::slice::from_ref(g)));
+                *self.ext_factor.insert(self.extent_factor_for(e_t))
+            }
+        };
         if k != 1.0 {
             cropped.ext_pos = cropped.ext_pos.map(|v| v * k);
             cropped.ext_neg = cropped.ext_neg.map(|v| v * k);

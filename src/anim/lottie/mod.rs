@@ -23,6 +23,7 @@
 
 pub mod geom;
 pub mod model;
+pub mod nesting;
 pub mod render;
 pub mod schema;
 pub mod value;
@@ -91,7 +92,8 @@ pub fn parse(path: &Path, text: &str) -> Result<Model> {
     if ip.abs() > 1e9 || op.abs() > 1e9 {
         return Err(Error::animation(path, format!("'ip' {ip} / 'op' {op} are absurd frame numbers")));
     }
-    if op <= ip {
+    // The model keeps frame numbers in f32: they must differ there too (`op` = 1e-300).
+    if op <= ip || op as f32 <= ip as f32 {
         return Err(Error::animation(
             path,
             format!("end frame 'op' ({op}) is not after the first frame 'ip' ({ip}); the animation has no frames"),
@@ -109,6 +111,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Model> {
     if root.layers.is_none() {
         return Err(Error::animation(path, "missing 'layers'; is this a Lottie file?"));
     }
+    nesting::check_references(path, &root)?;
     Ok(model::build(&root, w as f32, h as f32, fr as f32, ip as f32, op as f32))
 }
 
@@ -337,8 +340,8 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Animation> {
 
 /// Builds the regions of a parsed model.
 pub fn from_model(path: &Path, model: Model, options: &LoadOptions) -> Result<Animation> {
-    let width = ((model.width * options.scale).round() as u32).clamp(1, MAX_SIDE);
-    let height = ((model.height * options.scale).round() as u32).clamp(1, MAX_SIDE);
+    let (width, height) = super::scaled_canvas(path, model.width, model.height, options.scale)?;
+    nesting::check_work(path, &model, width, height)?;
     let frames = frame_count(&model);
     let root = &model.comps[0];
     let mut warnings: Vec<String> = model.warnings.clone();

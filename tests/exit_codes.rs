@@ -1,0 +1,99 @@
+//! The exit codes the README promises — 0 done, 1 error, 2 usage, 130 interrupted (the last
+//! is checked by `render_cli`'s resume test) — and limits that are errors before any work.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_fluidymation"))
+}
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("fm-exit-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn done_error_and_usage_have_their_codes() {
+    let demo = root().join("fixtures/demo/waving.json");
+    let demo = demo.to_str().unwrap();
+    assert_eq!(run(&["inspect", demo]).status.code(), Some(0));
+    assert_eq!(run(&["--version"]).status.code(), Some(0));
+    // Errors: the input, a value checked against it.
+    let o = run(&["inspect", "nowhere.json"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).starts_with("error: "));
+    assert_eq!(run(&["inspect", demo, "--frames", "60..70"]).status.code(), Some(1));
+    // Usage: what the command line itself gets wrong.
+    for args in [&["render", "--no-such-flag"][..], &["render"], &["inspect", demo, "--scale", "big"], &["paint"]] {
+        let o = run(args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        let err = stderr(&o);
+        assert!(err.starts_with("error: ") && (err.contains("Usage") || err.contains("--help")), "{err}");
+    }
+}
+
+#[test]
+fn frames_past_the_end_are_said() {
+    let demo = root().join("fixtures/demo/waving.json");
+    let o = run(&["inspect", demo.to_str().unwrap(), "--frames", "47..1000000"]);
+    assert_eq!(o.status.code(), Some(0));
+    assert!(
+        stderr(&o).contains("warning: --frames '47..1000000': the input has only 48 frames; using 47..48"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn limits_are_errors_before_any_work() {
+    let tmp = scratch("limits");
+    let demo = root().join("fixtures/demo/waving.json");
+    // A render too large for the memory limit: refused at once, nothing created.
+    let out = tmp.join("big");
+    let o = bin()
+        .args(["render", demo.to_str().unwrap(), "-o", out.to_str().unwrap(), "--scale", "16"])
+        .env_remove("FLUIDYMATION_MEMORY_LIMIT")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("memory this render needs") && err.contains("6400x6400") && err.contains("--scale"), "{err}");
+    assert!(!out.exists());
+    // A precomp containing itself twice over a masked solid (ran for 40 s before).
+    let solid = serde_json::json!({"ty": 1, "nm": "solid", "sc": "#ff0000", "sw": 200, "sh": 200, "ks": {},
+        "masksProperties": [{"mode": "a", "pt": {"a": 0, "k": {"c": true, "v": [[10, 10], [190, 10], [190, 190]],
+        "i": [[0, 0], [0, 0], [0, 0]], "o": [[0, 0], [0, 0], [0, 0]]}}}]});
+    let pre = |i: u32| serde_json::json!({"ty": 0, "nm": format!("self {i}"), "ind": i, "refId": "a", "w": 200, "h": 200, "ks": {}});
+    let doc = serde_json::json!({"v": "5.7.1", "fr": 24, "ip": 0, "op": 10, "w": 200, "h": 200,
+        "assets": [{"id": "a", "layers": [pre(1), pre(2), solid]}], "layers": [pre(1)]});
+    let file = tmp.join("selfref.json");
+    std::fs::write(&file, doc.to_string()).unwrap();
+    let o = run(&["inspect", file.to_str().unwrap(), "--frames", "5"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("precomp asset 'a' contains itself"), "{}", stderr(&o));
+    // A canvas that --scale makes larger than the largest side is refused, not cropped.
+    let wide = serde_json::json!({"v": "5.7.1", "fr": 24, "ip": 0, "op": 2, "w": 2000, "h": 1000, "layers": [
+        {"ty": 4, "nm": "dot", "ks": {}, "shapes": [{"ty": "el", "p": {"a": 0, "k": [50, 50]}, "s": {"a": 0, "k": [20, 20]}},
+        {"ty": "fl", "c": {"a": 0, "k": [1, 0, 0, 1]}, "o": {"a": 0, "k": 100}}]}]});
+    let file = tmp.join("wide.json");
+    std::fs::write(&file, wide.to_string()).unwrap();
+    let o = run(&["inspect", file.to_str().unwrap(), "--scale", "10"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("canvas width at --scale 10 is 20000 but at most 16384"), "{}", stderr(&o));
+    let _ = std::fs::remove_dir_all(Path::new(&tmp));
+}
