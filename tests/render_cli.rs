@@ -757,8 +757,9 @@ fn painted_share(layer_dir: &Path, mask_dir: &Path) -> (f64, usize) {
 #[test]
 fn thin_layers_keep_their_shape() {
     // The demo's legs (two 15 px bars) and scarf (a 12 px band) are far thinner than the
-    // thesis's blur σ = 8 and border width b = 12 px suit: fitted to their thickness they are
-    // painted over most of their area and not beyond it; with the thesis's values they are not.
+    // thesis's blur σ = 8 and border width b = 12 px suit: with the defaults (no blur, b fitted
+    // to their thickness) they are painted over most of their area and not beyond it; with the
+    // thesis's values, unfitted, they are not.
     let tmp = Scratch::new("thin");
     let masks = tmp.join("masks");
     let o = bin().args(["inspect", "--frames", "1..3", "--masks"]).arg(&masks).arg(demo()).output().unwrap();
@@ -766,12 +767,19 @@ fn thin_layers_keep_their_shape() {
     let fit = tmp.join("fit");
     assert_success(&render(&demo(), &fit, &["--frames", "1..3", "--keep-layers"]));
     let fixed = tmp.join("fixed");
-    assert_success(&render(&demo(), &fixed, &["--frames", "1..3", "--keep-layers", "--no-thin-fit"]));
+    assert_success(&render(
+        &demo(),
+        &fixed,
+        &["--frames", "1..3", "--keep-layers", "--no-thin-fit", "--blur-sigma", "8"],
+    ));
     for layer in ["05_legs", "03_scarf"] {
         let (share, outside) = painted_share(&fit.join("layers").join(layer), &masks.join(layer));
         let (share_fixed, _) = painted_share(&fixed.join("layers").join(layer), &masks.join(layer));
         assert!(share > 0.6, "{layer}: only {share:.2} of the shape painted");
         assert!(outside < 60, "{layer}: {outside} pixels painted well outside the shape");
-        assert!(share_fixed < 0.8 * share, "{layer}: fitting changed little ({share_fixed:.2} vs {share:.2})");
+        assert!(
+            share_fixed < 0.8 * share,
+            "{layer}: the thesis's σ and b changed little ({share_fixed:.2} vs {share:.2})"
+        );
     }
 }
