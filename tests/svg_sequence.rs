@@ -95,3 +95,32 @@ fn mismatched_sizes_and_bad_files_are_errors() {
     let e = anim::load(&dir("nothing").join("*.svg"), &LoadOptions::default()).unwrap_err();
     assert!(matches!(e, Error::Empty { .. }), "{e}");
 }
+
+#[test]
+fn pattern_tiles_are_bounded_before_drawing() {
+    // resvg draws a pattern's tile into a picture of its own: a tile 10^7 units wide under a
+    // skew asked for 30 GB. A tile of ordinary size loads and draws; one larger than the
+    // canvas and 2^24 px is refused at load, naming the file.
+    let tiled = |width: &str, transform: &str| {
+        format!(
+            r##"<defs><pattern id="p" width="{width}" height="8" patternUnits="userSpaceOnUse"><rect width="4" height="4" fill="#f00"/></pattern></defs>
+            <g id="a" transform="{transform}"><rect x="2" y="2" width="30" height="30" fill="url(#p)"/></g>"##
+        )
+    };
+    let d = dir("pattern-ok");
+    std::fs::write(d.join("f1.svg"), frame(&tiled("8", "skewX(80)"), 40, 40)).unwrap();
+    let a = anim::load(&d, &LoadOptions::default()).unwrap();
+    let fr = a.render(0, 0).unwrap();
+    assert!(fr.fill.data().iter().any(|c| c[3] > 0.99), "the pattern is drawn");
+    // At --scale 4 the same tile is still small.
+    assert!(anim::load(&d, &LoadOptions { scale: 4.0, ..Default::default() }).is_ok());
+
+    let d = dir("pattern-huge");
+    let f = d.join("f1.svg");
+    std::fs::write(&f, frame(&tiled("10000000", "skewX(80)"), 40, 40)).unwrap();
+    let e = anim::load(&d, &LoadOptions::default()).unwrap_err();
+    assert!(matches!(e, Error::Limit { .. }), "{e}");
+    let text = e.to_string();
+    assert!(text.contains("pattern tile") && text.contains("f1.svg"), "{text}");
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -100,6 +100,43 @@ pub const MAX_NUMBER: f64 = 1e8;
 /// Farthest a drawn shape may reach from the canvas origin, pixels.
 pub const MAX_REACH: f32 = 1e6;
 
+/// Most pixels of an SVG pattern tile, when the canvas has fewer: resvg draws one tile into
+/// a picture of its own before filling with it, so a pattern 10^7 units wide under a skew
+/// asked for 30 GB (found by fuzzing: regression svg/20261202-13521).
+pub const MAX_PATTERN_TILE: f64 = (1u64 << 24) as f64;
+
+/// The largest pattern tile that `group` draws with, in pixels of the canvas at scale 1: the
+/// tile's size under every transform applied to it (`outer`, the shape's, the pattern's),
+/// patterns inside patterns and masks included.
+fn largest_pattern_tile(group: &usvg::Group, outer: tiny_skia::Transform) -> f64 {
+    let mut largest = 0f64;
+    for node in group.children() {
+        match node {
+            usvg::Node::Group(g) => {
+                largest = largest.max(largest_pattern_tile(g, outer));
+                if let Some(m) = g.mask() {
+                    // A mask's content has its own root: the group's transform applies to it.
+                    largest = largest.max(largest_pattern_tile(m.root(), outer.pre_concat(g.abs_transform())));
+                }
+            }
+            usvg::Node::Path(p) => {
+                for paint in [p.fill().map(|f| f.paint()), p.stroke().map(|s| s.paint())].into_iter().flatten() {
+                    if let usvg::Paint::Pattern(pat) = paint {
+                        let (sx, sy) = outer.pre_concat(p.abs_transform()).pre_concat(pat.transform()).get_scale();
+                        let r = pat.rect();
+                        let tile = r.width() as f64 * sx as f64 * r.height() as f64 * sy as f64;
+                        largest = largest.max(if tile.is_nan() { f64::INFINITY } else { tile });
+                        largest =
+                            largest.max(largest_pattern_tile(pat.root(), tiny_skia::Transform::from_scale(sx, sy)));
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    largest
+}
+
 /// The numbers of an attribute value: in path data and point lists a letter separates them
 /// (`M1e38L…`); elsewhere a number must not continue a name or a hex color (`#1e9999`).
 fn numbers(value: &str, path_data: bool) -> impl Iterator<Item = f64> + '_ {
@@ -322,6 +359,8 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
     let mut stroked: Vec<String> = Vec::new();
     let mut any_text = false;
     let mut any_filter = false;
+    // The largest pattern tile of any frame (pixels at scale 1) and its frame.
+    let mut tile: Option<(f64, &PathBuf)> = None;
     for (f, path) in files.iter().enumerate() {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         if text.trim().is_empty() {
@@ -343,6 +382,10 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
                 value: reach as f64,
                 limit: MAX_REACH as f64,
             });
+        }
+        let t = largest_pattern_tile(tree.root(), tiny_skia::Transform::identity());
+        if t > tile.map_or(0.0, |(t, _)| t) {
+            tile = Some((t, path));
         }
         match size {
             None => {
@@ -395,6 +438,19 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
         });
     }
     let (width, height) = super::scaled_canvas(input, w, h, options.scale)?;
+    if let Some((t, path)) = tile {
+        let px = t * (width as f64 / w as f64) * (height as f64 / h as f64);
+        let limit = MAX_PATTERN_TILE.max(width as f64 * height as f64);
+        if px.is_nan() || px > limit {
+            return Err(Error::Limit {
+                path: path.clone(),
+                what: "pixels of a pattern tile (its size under its transforms and --scale; at most the canvas's, or 2^24)"
+                    .into(),
+                value: px.round(),
+                limit,
+            });
+        }
+    }
     let mut warnings = Vec::new();
     if any_text {
         let msg = "SVG text is not rendered (no fonts are loaded); convert text to paths".to_string();

@@ -51,7 +51,12 @@ fn to_ts(m: &Affine2) -> Option<tiny_skia::Transform> {
 const MAX_DEVICE_COORD: f32 = 1_000_000.0;
 
 /// True when `path` under `ts`, widened by `pad` local units, stays within safe coordinates.
+/// A path with a point that is not a number is not drawable either: its bounds leave the
+/// point out, and tiny-skia panics on it (found by fuzzing: regression lottie/20261202-66841).
 fn drawable(path: &tiny_skia::Path, ts: tiny_skia::Transform, pad: f32) -> bool {
+    if !path.points().iter().all(|p| p.is_finite()) {
+        return false;
+    }
     let b = path.bounds();
     let pad = if pad.is_finite() { pad.max(0.0) } else { return false };
     let corners = [
