@@ -54,6 +54,7 @@ fn edit_checkpoint(s: &mut SynthState, rng: &mut Rng) {
             }
         }
         8 => s.has_prev = u(rng, s.has_prev),
+        // Any other factor than the one the target gives is refused.
         10 if rng.chance(0.5) => s.ext_factor = f32_hostile(rng, s.ext_factor),
         9 => {
             if !s.masks.is_empty() {
@@ -73,8 +74,10 @@ fn edit_checkpoint(s: &mut SynthState, rng: &mut Rng) {
                 }
                 let m = &mut s.matches[rng.below(n)];
                 match rng.below(9) {
-                    7 => m.flow.0 = f32_hostile(rng, m.flow.0),
-                    8 => m.flow.1 = f32_hostile(rng, m.flow.1),
+                    // Only impossible flows: a plausible one is a forgery the checksums cannot
+                    // tell from the real state (they guard against damage).
+                    7 => m.flow.0 = *rng.pick(&[f32::NAN, f32::INFINITY, -f32::INFINITY, 3.4e38, -1e30]),
+                    8 => m.flow.1 = *rng.pick(&[f32::NAN, f32::INFINITY, -f32::INFINITY, 3.4e38, -1e30]),
                     0 => m.x = f32_hostile(rng, m.x),
                     1 => m.y = f32_hostile(rng, m.y),
                     2 => m.c = f32_hostile(rng, m.c),
