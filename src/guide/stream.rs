@@ -128,11 +128,12 @@ impl<'p> GuideStreamBuilder<'p> {
             if j + 1 < n {
                 accumulate(&mut acc, mask, f);
             }
-            for a in mask.gather_plane(&acc) {
+            let gathered = mask.gather_plane(&acc);
+            for a in &gathered {
                 extents.add(a.length());
             }
             if j % seg_len == 0 && j > 0 {
-                checkpoints[j / seg_len - 1] = Some(mask.gather_plane(&acc));
+                checkpoints[j / seg_len - 1] = Some(gathered);
             }
             done += 1;
             match progress {

@@ -129,7 +129,7 @@ pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
         // (its source, where the paint started). The rotation M turns with the exemplar's flow
         // direction between the two points, so it still maps the target's flow onto the
         // exemplar's where the match now is (the θ rule holds after the move).
-        let info_at = |x: f32, y: f32| src.nearest(best_i, x, y).map(|idx| &src.info[idx]);
+        let info_at = |x: f32, y: f32| src.info_at(best_i, x, y).map(|(_, inf)| inf);
         if (x, y) == (m.x, m.y) {
             return;
         }
