@@ -41,7 +41,8 @@ fn exemplar_against_itself_scores_identity() {
     assert_eq!(s.edge_darkening_ratio, Some(1.0));
     assert_eq!(s.incoherent_change_ratio, Some(1.0));
     assert_eq!(s.edge_darkening, r.exemplar.edge_darkening);
-    assert_eq!(s.palette_distance, Some([0.0; 3]));
+    // Against the exemplar's colors mixed per depth: 0 up to rounding.
+    assert!(s.palette_distance.unwrap().iter().all(|&d| d < 1e-9), "{:?}", s.palette_distance);
     assert_eq!(s.motion_agreement, r.exemplar.motion_agreement);
     // The bloom's paint flows outward with its growing mask.
     assert!(s.motion_agreement.unwrap() > 0.5, "{:?}", s.motion_agreement);
@@ -552,4 +553,47 @@ fn batched_evaluation_equals_the_whole() {
     // A frame of another size is refused with its number.
     let e = ev.push(&out[..1], &[Plane::filled(60, 64, 1.0)]).unwrap_err().to_string();
     assert!(e.contains("target mask 10"), "{e}");
+}
+
+/// Paint whose band ≤ 10 px inside the edge is dark and strongly grained and whose middle is
+/// light and calm, on a disc of radius `r` (`frames` frames of `size`²).
+fn banded(size: usize, r: f32, frames: usize) -> (Vec<Plane<Rgb>>, Vec<Plane<f32>>) {
+    let c = size as f32 / 2.0;
+    let mask = disc(size, size, c, c, r);
+    let shape = Shape::from_coverage(&mask);
+    let frame = |t: usize| {
+        Plane::from_fn(size, size, |x, y| {
+            let g = texture(x as f32 + 3.0 * t as f32, y as f32, 5) - 0.5;
+            if shape.sdf.get(x, y) < 10.0 { paint(0.75 + 0.5 * g) } else { paint(0.3 + 0.1 * g) }
+        })
+    };
+    ((0..frames).map(frame).collect(), vec![mask; frames])
+}
+
+/// The exemplar's contrast and colors are taken at the output's own distances from the edge:
+/// a target four times the exemplar's size, painted exactly as the exemplar is painted at
+/// each depth, scores like the exemplar (contrast 1, palette ≈ 0), where the comparison with
+/// the exemplar's whole interior — mostly its strong band — would call it washed out.
+#[test]
+fn depth_matching_compares_like_with_like() {
+    let mut ex = bloom().exemplar();
+    let (frames, masks) = banded(64, 22.0, 6);
+    ex.frames = frames.iter().zip(&masks).map(|(f, m)| over_paper(f, m)).collect();
+    ex.masks = masks;
+    let (out_rgb, out_masks) = banded(224, 100.0, 6);
+    let out: Vec<_> = out_rgb.iter().zip(&out_masks).map(|(f, m)| with_alpha(f, m)).collect();
+    let opts = EvalOptions { patches: eval::PatchParams { samples: 64, ..Default::default() }, ..Default::default() };
+    let s = eval::evaluate(&out, &ex, &out_masks, &opts).unwrap().summary;
+    println!(
+        "contrast {:?} (whole {:?}), palette {:?} (whole {:?})",
+        s.contrast_ratio, s.contrast_ratio_whole, s.palette_distance_mean, s.palette_distance_whole
+    );
+    assert!(close(s.contrast_ratio.unwrap(), 1.0, 0.06), "{:?}", s.contrast_ratio);
+    assert!(s.contrast_ratio_whole.unwrap() < 0.6, "{:?}", s.contrast_ratio_whole);
+    assert!(s.palette_distance_mean.unwrap() < 0.01, "{:?}", s.palette_distance_mean);
+    assert!(s.palette_distance_whole.unwrap() > 0.05, "{:?}", s.palette_distance_whole);
+    // A flat output at the same depths still scores no contrast.
+    let flat: Vec<_> = out_masks.iter().map(|m| with_alpha(&Plane::filled(224, 224, paint(0.3)), m)).collect();
+    let f = eval::evaluate(&flat, &ex, &out_masks, &opts).unwrap().summary;
+    assert!(f.contrast_ratio.unwrap() < 0.02, "{:?}", f.contrast_ratio);
 }

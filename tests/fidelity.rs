@@ -20,8 +20,9 @@ fn suite(options: SuiteOptions) -> SuiteReport {
 
 /// The identity at full size, every bundled exemplar: the floors (PSNR ≥ 28 dB in every
 /// frame, edge darkening ≥ 0.9 of the exemplar's, coverage IoU ≥ 0.97).
-/// Measured: see the README's quality table (identity rows); the worst frame of blue-bloom is
-/// 45.6 dB, edge darkening 1.00 and IoU of the alpha 1.00 everywhere.
+/// Measured: see the README's quality table (identity rows); the worst frame over all five is
+/// green-wash's 32.7 dB (the others 47.2–83.1), edge darkening 1.00 and IoU of the alpha 1.00
+/// everywhere.
 #[test]
 fn identity_gives_back_the_exemplar_at_full_size() {
     let report = suite(SuiteOptions { targets: vec![], identity: true, ..SuiteOptions::default() });
@@ -49,16 +50,21 @@ fn check(what: &str, value: Option<f32>, floor: f32, higher: bool, failures: &mu
 /// Moving targets at the size users run (512², 24 frames), two exemplars with different rims.
 ///
 /// Measured (`quality -e blue-bloom -e ink-rims --target growing --target translating
-/// --frames 24`): IoU of the alpha 0.996–0.997, contrast 0.48–0.58, edge darkening
-/// 0.62–0.90, palette 0.021–0.064, incoherent change 0.86–0.98, motion agreement 0.61–0.67.
-/// Before the fidelity work the same targets (48 frames, README) scored IoU α 0.92–0.94, edge
-/// darkening −0.27–0.27 and incoherent change 1.22–2.0: those floors fail on that engine.
+/// --frames 24`, κ = 2): IoU of the alpha 0.996–0.997, contrast 0.68–0.83 (of the exemplar's
+/// at the same depths), edge darkening 0.64–0.85, palette 0.007–0.084, incoherent change
+/// 0.92–1.07, motion agreement 0.61–0.69. With κ = 1 (the engine before) contrast was
+/// 0.63–0.80, which fails the contrast floor on blue-bloom. Before the fidelity work the same
+/// targets (48 frames, README) scored IoU α 0.92–0.94, edge darkening −0.27–0.27 and
+/// incoherent change 1.22–2.0: those floors fail on that engine.
 ///
 /// The floors are reached for coverage, incoherent change (≤ 1.2) and motion
-/// agreement (≥ 0.6); not yet for contrast (0.85: measured 0.48–0.58; `--coherence 2` gives
-/// 0.60–0.67), edge darkening of blue-bloom (0.8: measured 0.62–0.72) and the palette of
-/// ink-rims (0.03: 0.063–0.064). The floors below are the measured values less a margin
-/// (~0.05–0.1; the spread between seeds and targets is ~0.05).
+/// agreement (≥ 0.6); not yet for contrast (0.85: measured 0.68–0.83), edge darkening of
+/// blue-bloom and ink-rims growing (0.8: measured 0.64–0.78) and the palette of ink-rims (0.03:
+/// 0.066–0.084). The floors below are the measured values less a margin (~0.05–0.1; the
+/// spread between seeds and targets is ~0.05), except contrast: 0.66 against the measured
+/// 0.68, close enough to catch a return to κ = 1 (0.63); the palette's was 0.08 against the exemplar's
+/// whole interior and κ = 1 (measured 0.063), and is 0.095 against the depth-matched palette
+/// with κ = 2 (measured 0.084).
 #[test]
 fn moving_targets_keep_the_rim_texture_and_coherence() {
     let report = suite(SuiteOptions {
@@ -73,11 +79,11 @@ fn moving_targets_keep_the_rim_texture_and_coherence() {
         let s = &r.summary;
         let name = |m: &str| format!("{} {} {m}", r.exemplar, r.target);
         check(&name("IoU α"), r.coverage_alpha, 0.98, true, &mut failures);
-        check(&name("contrast"), s.contrast_ratio, 0.42, true, &mut failures);
-        check(&name("edge darkening"), s.edge_darkening_ratio, 0.52, true, &mut failures);
-        check(&name("palette"), s.palette_distance_mean, 0.08, false, &mut failures);
+        check(&name("contrast"), s.contrast_ratio, 0.66, true, &mut failures);
+        check(&name("edge darkening"), s.edge_darkening_ratio, 0.56, true, &mut failures);
+        check(&name("palette"), s.palette_distance_mean, 0.095, false, &mut failures);
         check(&name("incoherent change"), s.incoherent_change_ratio, 1.2, false, &mut failures);
-        check(&name("motion agreement"), s.motion_agreement, 0.5, true, &mut failures);
+        check(&name("motion agreement"), s.motion_agreement, 0.55, true, &mut failures);
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
@@ -87,11 +93,12 @@ fn moving_targets_keep_the_rim_texture_and_coherence() {
 /// window, contrast and edge darkening relative to the first window's. At half size (256²,
 /// the exemplar scaled alike) to keep the test under two minutes.
 ///
-/// Measured (`quality -e ink-rims -e blue-bloom --target long --scale 0.5`): ink-rims
-/// contrast 0.86–1.01 and rim 0.98–1.10 of the first window; blue-bloom contrast 0.80–0.92
-/// and rim 0.71–0.78 (its first window has the young bloom's strong rim, which then
-/// settles). The floor (0.9 in every window) is reached by ink-rims' rim only; the
-/// floors here are the measured minima less 0.06–0.08.
+/// Measured (`quality -e ink-rims -e blue-bloom --target long --scale 0.5`, κ = 2): ink-rims
+/// contrast 0.86–0.97 and rim 1.00–1.11 of the first window; blue-bloom contrast 0.79–0.93
+/// and rim 0.83–0.89 (its first window has the young bloom's strong rim, which then
+/// settles); over the whole run contrast 0.58 and 0.49, edge darkening 1.18 and 0.77. The
+/// issue's floor (0.9 in every window) is reached by ink-rims' rim only; the floors here are
+/// the measured minima less 0.06–0.1.
 #[test]
 fn long_target_keeps_its_paint_in_every_window() {
     let report = suite(SuiteOptions {
@@ -101,7 +108,7 @@ fn long_target_keeps_its_paint_in_every_window() {
         scale: 0.5,
         ..SuiteOptions::default()
     });
-    let floors = [("ink-rims", 0.8, 0.9), ("blue-bloom", 0.72, 0.63)];
+    let floors = [("ink-rims", 0.8, 0.9), ("blue-bloom", 0.72, 0.75)];
     let mut failures = Vec::new();
     for (r, (name, contrast, rim)) in report.rows.iter().zip(floors) {
         assert_eq!((r.exemplar.as_str(), r.frames, r.windows.len()), (name, 300, 6));
@@ -111,7 +118,7 @@ fn long_target_keeps_its_paint_in_every_window() {
             check(&what("edge darkening"), w.rim_vs_first, rim, true, &mut failures);
         }
         // And the paint is still the exemplar's: its texture and rim, not a flat fill.
-        check(&format!("{name} contrast"), r.summary.contrast_ratio, 0.3, true, &mut failures);
+        check(&format!("{name} contrast"), r.summary.contrast_ratio, 0.4, true, &mut failures);
         check(&format!("{name} edge darkening"), r.summary.edge_darkening_ratio, 0.6, true, &mut failures);
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));

@@ -71,6 +71,10 @@ pub struct SynthFlags {
     /// Also optimize the finest pyramid level (slower; the thesis only votes it).
     #[arg(long)]
     pub optimize_finest: bool,
+    /// Give the output back the exemplar's fine grain that voting averages away (sharper
+    /// stills; on moving shapes the grain flickers, so off by default).
+    #[arg(long)]
+    pub keep_grain: bool,
     /// Keep σ and b as given for thin layers too (by default they are lowered to fit layers
     /// only a few pixels thick; giving --blur-sigma or --border-width also turns this off).
     #[arg(long)]
@@ -97,8 +101,11 @@ impl SynthFlags {
     /// The validated parameters.
     pub fn params(&self) -> Result<Params> {
         let fit = !self.no_thin_fit && self.blur_sigma.is_none() && self.border_width.is_none();
-        let mut b: ParamsBuilder =
-            Params::builder().seed(self.seed).optimize_finest(self.optimize_finest).fit_thin_layers(fit);
+        let mut b: ParamsBuilder = Params::builder()
+            .seed(self.seed)
+            .optimize_finest(self.optimize_finest)
+            .keep_grain(self.keep_grain)
+            .fit_thin_layers(fit);
         if let Some(v) = self.dist_weight {
             b = b.w_df(v);
         }
@@ -194,6 +201,9 @@ impl SynthFlags {
         if self.optimize_finest {
             out.push("--optimize-finest".into());
         }
+        if self.keep_grain {
+            out.push("--keep-grain".into());
+        }
         if self.no_thin_fit {
             out.push("--no-thin-fit".into());
         }
@@ -288,6 +298,7 @@ mod tests {
             prev_modulation_bounds: Some("10,2".into()),
             vote_sigma: Some(0.0),
             optimize_finest: true,
+            keep_grain: true,
             ..Default::default()
         };
         let args = flags.to_args();

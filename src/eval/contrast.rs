@@ -31,10 +31,20 @@ pub fn local_contrast_seq(frames: &[Plane<Rgb>], regions: &[Mask]) -> Measure {
 
 /// Sum and count behind [`local_contrast`], for pooling over frames.
 pub(crate) fn local_contrast_mean(img: &Plane<Rgb>, region: &Mask) -> Mean {
+    local_contrast_binned(img, region, 1, |_, _| 0).into_iter().fold(Mean::default(), Mean::merged)
+}
+
+/// [`local_contrast_mean`] split by `bin(x, y)` (`0..bins`) of each qualifying pixel.
+pub(crate) fn local_contrast_binned(
+    img: &Plane<Rgb>,
+    region: &Mask,
+    bins: usize,
+    bin: impl Fn(usize, usize) -> usize + Sync,
+) -> Vec<Mean> {
     let (w, h) = img.size();
     let r = CONTRAST_WINDOW / 2;
     if w < CONTRAST_WINDOW || h < CONTRAST_WINDOW || region.size() != img.size() {
-        return Mean::default();
+        return vec![Mean::default(); bins];
     }
     // Summed-area tables of luma and luma² (f64: no cancellation trouble in var = E[y²] − E[y]²).
     let stride = w + 1;
@@ -58,12 +68,12 @@ pub(crate) fn local_contrast_mean(img: &Plane<Rgb>, region: &Mask) -> Mean {
     (r..h - r)
         .into_par_iter()
         .map(|y| {
-            let mut m = Mean::default();
+            let mut m = vec![Mean::default(); bins];
             for x in r..w - r {
                 if region.get(x, y) {
                     let mean = box_sum(&s1, x - r, y - r) / n;
                     let var = (box_sum(&s2, x - r, y - r) / n - mean * mean).max(0.0);
-                    m.add(var.sqrt());
+                    m[bin(x, y).min(bins - 1)].add(var.sqrt());
                 }
             }
             m
@@ -71,7 +81,7 @@ pub(crate) fn local_contrast_mean(img: &Plane<Rgb>, region: &Mask) -> Mean {
         .collect::<Vec<_>>()
         // Summed in row order: the same result whatever the thread count.
         .into_iter()
-        .fold(Mean::default(), Mean::merged)
+        .fold(vec![Mean::default(); bins], |acc, m| acc.into_iter().zip(m).map(|(a, b)| a.merged(b)).collect())
 }
 
 #[cfg(test)]

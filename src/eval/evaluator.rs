@@ -2,8 +2,9 @@
 //! measured batch by batch ([`Evaluator`]), and [`evaluate`] doing both for a whole sequence.
 
 use super::coherence::pair_residual;
-use super::contrast::local_contrast_mean;
+use super::contrast::local_contrast_binned;
 use super::coverage::coverage_from_counts;
+use super::depth::{DEPTH_BINS, DepthProfile, depth_bin, region_bins};
 use super::flow::motion_pair_mean;
 use super::patches::frame_patch_mean;
 use super::temporal::frame_change_mean;
@@ -49,6 +50,7 @@ pub struct Reference {
     rim: Measure,
     coherence: Measure,
     hist: ColorHistogram,
+    depth: DepthProfile,
 }
 
 impl Reference {
@@ -78,6 +80,7 @@ impl Reference {
         for (f, r) in frames.iter().zip(&regions) {
             hist.add_masked(f, r);
         }
+        let depth = timed("exemplar depth profile", || DepthProfile::new(&frames, &shapes, &regions));
         Ok(Reference {
             name: exemplar.meta.name.clone(),
             step,
@@ -92,6 +95,7 @@ impl Reference {
             rim,
             coherence,
             hist,
+            depth,
         })
     }
 
@@ -142,6 +146,9 @@ struct FrameTotals {
     /// Intersection and union of the painted area with the target mask.
     coverage: (u64, u64),
     contrast: Mean,
+    /// `contrast` per depth bin, and the interior's pixels per depth bin.
+    contrast_bins: Vec<Mean>,
+    region_bins: Vec<u64>,
     hist: ColorHistogram,
     patches: Mean,
     temporal: Mean,
@@ -242,9 +249,13 @@ impl<'a> Evaluator<'a> {
                     }
                     None => (Mean::default(), Mean::default(), (None, 0)),
                 };
+                let contrast_bins =
+                    local_contrast_binned(&rgb[i], &region, DEPTH_BINS, |x, y| depth_bin(shape.sdf.get(x, y)));
                 FrameTotals {
                     coverage: intersection_union(&painted_mask(&output[i], &self.painted), &shape.mask),
-                    contrast: local_contrast_mean(&rgb[i], &region),
+                    contrast: contrast_bins.iter().fold(Mean::default(), |a, &b| a.merged(b)),
+                    region_bins: region_bins(shape, &region),
+                    contrast_bins,
                     hist: ColorHistogram::of_region(&rgb[i], &region),
                     patches: frame_patch_mean(
                         &self.index,
@@ -289,10 +300,17 @@ impl<'a> Evaluator<'a> {
         };
         let coverage = coverage_from_counts(&frames.iter().map(|t| t.coverage).collect::<Vec<_>>());
         let mut hist = ColorHistogram::new();
+        let mut contrast_bins = vec![Mean::default(); DEPTH_BINS];
+        let mut counts = vec![0u64; DEPTH_BINS];
         for t in frames {
             hist.merge(&t.hist);
+            for k in 0..DEPTH_BINS {
+                contrast_bins[k] = contrast_bins[k].merged(t.contrast_bins[k]);
+                counts[k] += t.region_bins[k];
+            }
         }
-        let palette = hist.wasserstein(&r.hist);
+        let palette = r.depth.palette(&hist, &counts);
+        let palette_whole = hist.wasserstein(&r.hist);
         let per_frame = frames
             .par_iter()
             .enumerate()
@@ -300,8 +318,8 @@ impl<'a> Evaluator<'a> {
                 frame: range.start + k + 1,
                 coverage_iou: coverage.per_frame[k],
                 local_contrast: t.contrast.value(),
-                contrast_ratio: ratio(t.contrast.value(), r.contrast.value),
-                palette_distance: t.hist.wasserstein(&r.hist),
+                contrast_ratio: ratio(t.contrast.value(), r.depth.contrast(&t.contrast_bins)),
+                palette_distance: r.depth.palette(&t.hist, &t.region_bins),
                 patch_nn_distance: t.patches.value(),
                 temporal_change: t.temporal.value(),
                 temporal_change_ratio: ratio(t.temporal.value(), r.temporal.value),
@@ -315,9 +333,11 @@ impl<'a> Evaluator<'a> {
         let summary = Summary {
             coverage_iou: coverage.value,
             local_contrast: contrast.value,
-            contrast_ratio: ratio(contrast.value, r.contrast.value),
+            contrast_ratio: ratio(contrast.value, r.depth.contrast(&contrast_bins)),
+            contrast_ratio_whole: ratio(contrast.value, r.contrast.value),
             palette_distance: palette,
             palette_distance_mean: palette.map(|p| (p[0] + p[1] + p[2]) / 3.0),
+            palette_distance_whole: palette_whole.map(|p| (p[0] + p[1] + p[2]) / 3.0),
             patch_nn_distance: patches.value,
             temporal_change: temporal.value,
             temporal_change_ratio: ratio(temporal.value, r.temporal.value),

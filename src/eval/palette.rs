@@ -98,6 +98,38 @@ impl ColorHistogram {
     }
 }
 
+impl ColorHistogram {
+    /// [`ColorHistogram::wasserstein`] to the mixture of `parts`, each histogram normalized
+    /// and weighted by its weight; `None` if this one is empty or no part has both colors and
+    /// weight.
+    pub fn wasserstein_mixture(&self, parts: &[(&ColorHistogram, f64)]) -> Option<[f32; 3]> {
+        let parts: Vec<(&ColorHistogram, f64)> =
+            parts.iter().copied().filter(|(h, w)| !h.is_empty() && *w > 0.0).collect();
+        let total: f64 = parts.iter().map(|p| p.1).sum();
+        if self.is_empty() || parts.is_empty() {
+            return None;
+        }
+        let na = self.count as f64;
+        let mut out = [0f32; 3];
+        for (ch, o) in out.iter_mut().enumerate() {
+            let mut ca = 0u64;
+            let mut cb = vec![0u64; parts.len()];
+            let mut acc = 0f64;
+            for k in 0..HISTOGRAM_BINS - 1 {
+                ca += self.bins[k][ch];
+                let mut fb = 0f64;
+                for ((h, w), c) in parts.iter().zip(cb.iter_mut()) {
+                    *c += h.bins[k][ch];
+                    fb += w / total * (*c as f64 / h.count as f64);
+                }
+                acc += (ca as f64 / na - fb).abs();
+            }
+            *o = (acc / (HISTOGRAM_BINS - 1) as f64) as f32;
+        }
+        Some(out)
+    }
+}
+
 /// Exact per-channel Wasserstein-1 (earth mover's) distance between the empirical
 /// distributions of two color samples, `∫ |F_a(x) − F_b(x)| dx` per channel (the mean
 /// absolute difference of matched quantiles); `None` if either sample is empty. The samples

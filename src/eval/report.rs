@@ -50,12 +50,22 @@ pub struct Summary {
     pub coverage_iou: Option<f32>,
     /// Mean local contrast (7×7 luma std) of the output interiors.
     pub local_contrast: Option<f32>,
-    /// `local_contrast` / the exemplar's: ≈ 1 keeps the exemplar's texture, ≈ 0 is wash-out.
+    /// `local_contrast` / the exemplar's at the same depths (distance from the edge, see the
+    /// [module documentation](super)): ≈ 1 keeps the exemplar's texture, ≈ 0 is wash-out.
     pub contrast_ratio: Option<f32>,
-    /// Per-channel (R, G, B) Wasserstein-1 distance of interior colors, output vs exemplar.
+    /// `local_contrast` / the exemplar's over its whole interior, whatever the depths (the
+    /// measure before depth matching; lower than `contrast_ratio` where the output's interior
+    /// is deeper than the exemplar's).
+    #[serde(default)]
+    pub contrast_ratio_whole: Option<f32>,
+    /// Per-channel (R, G, B) Wasserstein-1 distance of interior colors, output vs exemplar at
+    /// the same depths.
     pub palette_distance: Option<[f32; 3]>,
     /// Mean of the three `palette_distance` channels.
     pub palette_distance_mean: Option<f32>,
+    /// The mean palette distance to the exemplar's whole interior, whatever the depths.
+    #[serde(default)]
+    pub palette_distance_whole: Option<f32>,
     /// Mean RMS distance of sampled output 5×5 patches to their nearest exemplar patches.
     pub patch_nn_distance: Option<f32>,
     /// Mean absolute change between consecutive frames in the stationary interior.

@@ -60,7 +60,8 @@ impl fmt::Display for SuiteReport {
         writeln!(
             f,
             "contrast, rim (edge darkening), t.change (temporal change), incoh. (incoherent change): output / exemplar, \
-             1 = like the exemplar; palette: W1 distance, 0 = the exemplar's colors; motion: mean cosine with the target's motion"
+             1 = like the exemplar; palette: W1 distance, 0 = the exemplar's colors (contrast and palette against the exemplar \
+             at the same distances from the edge); motion: mean cosine with the target's motion"
         )?;
         writeln!(f)?;
         line(f, &HEADER.map(String::from), "notes")?;

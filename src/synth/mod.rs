@@ -425,7 +425,15 @@ impl Synthesizer {
         }
         st.target += t_pyr.elapsed();
         let src = self.source.pyramid.clone();
-        let p = &self.params;
+        // The first frame starts from a random field: its search runs without the coherence
+        // factor κ, which would keep random matches against better ones (Params::coherence).
+        let plain;
+        let p = if self.frame == 0 && self.params.coherence != 1.0 {
+            plain = Params { coherence: 1.0, ..self.params.clone() };
+            &plain
+        } else {
+            &self.params
+        };
         let b = src.border_width;
         let ext_cap = p.ext_clamp.then_some(src.ext_max);
         let paper = src.paper;
@@ -549,7 +557,13 @@ impl Synthesizer {
             }
             if l == 0 {
                 // The output: bicubic sampling keeps rotated patches sharper than bilinear.
-                final_rgb = timed(&mut st.vote, || vote::vote_with(sl, &field, paper, p.vote_sigma, true));
+                final_rgb = timed(&mut st.vote, || {
+                    if p.keep_grain {
+                        vote::vote_grain(sl, &field, paper, p.vote_sigma)
+                    } else {
+                        vote::vote_with(sl, &field, paper, p.vote_sigma, true)
+                    }
+                });
             }
             nnf = Some(field);
             level_times.push(t0.elapsed());

@@ -220,6 +220,10 @@ pub(crate) struct SourceLevel {
     pub seg_count: Vec<[usize; 2]>,
     /// Lane weights in quantization units ([`Quant::weights`]).
     pub lane_w: [f32; LANES],
+    /// Grain map (finest level only, else empty), same padded layout: the low-pass of the
+    /// colors within their own segment (paint or paper), 0..=255, and in lane 3 the local
+    /// standard deviation of the grain (color − low-pass), in units of 1/1020.
+    pub grain: Vec<[u8; 4]>,
 }
 
 impl SourceLevel {
@@ -278,6 +282,20 @@ impl SourceLevel {
         let top: [f32; 4] = std::array::from_fn(|c| a[c] + (b[c] - a[c]) * fx);
         let bot: [f32; 4] = std::array::from_fn(|k| c[k] + (d[k] - c[k]) * fx);
         std::array::from_fn(|c| (top[c] + (bot[c] - top[c]) * fy) * (1.0 / 255.0))
+    }
+
+    /// Bilinear sample of [`SourceLevel::grain`] at (x, y) of frame i: the low-pass color
+    /// (0..=1) and the local grain deviation.
+    #[inline(always)]
+    pub fn sample_grain(&self, i: usize, x: f32, y: f32) -> ([f32; 3], f32) {
+        let (base, fx, fy) = self.bilinear_at(i, x, y);
+        let quad = &self.grain[base..=base + self.stride + 1];
+        let p = |k: usize| -> [f32; 4] { std::array::from_fn(|c| quad[k][c] as f32) };
+        let (a, b, c, d) = (p(0), p(1), p(self.stride), p(self.stride + 1));
+        let top: [f32; 4] = std::array::from_fn(|c| a[c] + (b[c] - a[c]) * fx);
+        let bot: [f32; 4] = std::array::from_fn(|k| c[k] + (d[k] - c[k]) * fx);
+        let v: [f32; 4] = std::array::from_fn(|c| top[c] + (bot[c] - top[c]) * fy);
+        ([v[0] / 255.0, v[1] / 255.0, v[2] / 255.0], v[3] / GRAIN_STD_UNIT)
     }
 
     /// The 2 × 2 block of [`SourceLevel::sample_rgb`]: the padded index of its top-left pixel
@@ -455,7 +473,12 @@ impl SourcePyramid {
                 cur_rgb = cur_rgb.iter().map(img::downsample2).collect();
                 cur_g = cur_g.iter().map(|g| g.downsample2()).collect();
             }
-            out.push(build_level(&cur_rgb, &cur_g, &quant, quant.weights(params.w_df, params.w_ext, v), border_width));
+            let mut level =
+                build_level(&cur_rgb, &cur_g, &quant, quant.weights(params.w_df, params.w_ext, v), border_width);
+            if l == 0 {
+                build_grain(&mut level, &cur_rgb, &cur_g);
+            }
+            out.push(level);
         }
         let ext_scale = crate::guide::extent_scale(guides);
         SourcePyramid {
@@ -571,7 +594,68 @@ fn build_level(rgb: &[Plane<Rgb>], guides: &[FrameGuides], qn: &Quant, lane_w: [
         bits
     });
     valid_bits[2] = valid_bits[0].iter().zip(&valid_bits[1]).map(|(a, b)| a | b).collect();
-    SourceLevel { w, h, frames, stride, frame_len, feat, info, dirs, valid, valid_bits, seg_count, lane_w }
+    SourceLevel {
+        w,
+        h,
+        frames,
+        stride,
+        frame_len,
+        feat,
+        info,
+        dirs,
+        valid,
+        valid_bits,
+        seg_count,
+        lane_w,
+        grain: Vec::new(),
+    }
+}
+
+/// σ of the low-pass that separates a frame's structure from its grain, pixels.
+pub(crate) const GRAIN_SIGMA: f32 = 1.5;
+/// Scale of the grain deviation in [`SourceLevel::grain`] lane 3.
+pub(crate) const GRAIN_STD_UNIT: f32 = 1020.0;
+
+/// Builds [`SourceLevel::grain`] of `level` from its frames and masks.
+fn build_grain(level: &mut SourceLevel, rgb: &[Plane<Rgb>], guides: &[FrameGuides]) {
+    let (w, h) = (level.w, level.h);
+    let mut grain = vec![[0u8; 4]; level.feat.len()];
+    for (i, (c, g)) in rgb.iter().zip(guides).enumerate() {
+        // Low-pass within each segment: the edge of the paint is structure, not grain.
+        let split = |f: &dyn Fn(usize, usize) -> [f32; 4]| -> [Plane<[f32; 4]>; 2] {
+            [false, true].map(|inside| {
+                let p = Plane::from_fn(w, h, |x, y| if g.mask.get(x, y) == inside { f(x, y) } else { [0.0; 4] });
+                img::gaussian_blur(&p, GRAIN_SIGMA)
+            })
+        };
+        let norm = |b: &[Plane<[f32; 4]>; 2], x: usize, y: usize| {
+            let v = b[g.mask.get(x, y) as usize].get(x, y);
+            let n = v[3].max(1e-6);
+            [v[0] / n, v[1] / n, v[2] / n]
+        };
+        let low = split(&|x, y| {
+            let v = c.get(x, y);
+            [v[0], v[1], v[2], 1.0]
+        });
+        let low = Plane::from_fn(w, h, |x, y| norm(&low, x, y));
+        let var = split(&|x, y| {
+            let (v, l) = (c.get(x, y), low.get(x, y));
+            let d = (v[0] - l[0]).powi(2) + (v[1] - l[1]).powi(2) + (v[2] - l[2]).powi(2);
+            [d, 0.0, 0.0, 1.0]
+        });
+        for py in 0..h + 2 * PAD {
+            for px in 0..level.stride {
+                let x = (px as isize - PAD as isize).clamp(0, w as isize - 1) as usize;
+                let y = (py as isize - PAD as isize).clamp(0, h as isize - 1) as usize;
+                let l = low.get(x, y);
+                let sd = norm(&var, x, y)[0].max(0.0).sqrt();
+                let q = |v: f32, unit: f32| (v * unit).round().clamp(0.0, 255.0) as u8;
+                grain[i * level.frame_len + py * level.stride + px] =
+                    [q(l[0], 255.0), q(l[1], 255.0), q(l[2], 255.0), q(sd, GRAIN_STD_UNIT)];
+            }
+        }
+    }
+    level.grain = grain;
 }
 
 #[cfg(test)]
