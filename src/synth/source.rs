@@ -220,7 +220,8 @@ pub(crate) struct SourceLevel {
     pub seg_count: Vec<[usize; 2]>,
     /// Lane weights in quantization units ([`Quant::weights`]).
     pub lane_w: [f32; LANES],
-    /// Grain map (finest level only, else empty), same padded layout: the low-pass of the
+    /// Grain map (finest level only, and only with [`Params::keep_grain`]; else empty), same
+    /// padded layout: the low-pass of the
     /// colors within their own segment (paint or paper), 0..=255, and in lane 3 the local
     /// standard deviation of the grain (color − low-pass), in units of 1/1020.
     pub grain: Vec<[u8; 4]>,
@@ -475,7 +476,7 @@ impl SourcePyramid {
             }
             let mut level =
                 build_level(&cur_rgb, &cur_g, &quant, quant.weights(params.w_df, params.w_ext, v), border_width);
-            if l == 0 {
+            if l == 0 && params.keep_grain {
                 build_grain(&mut level, &cur_rgb, &cur_g);
             }
             out.push(level);

@@ -208,7 +208,8 @@ mod tests {
     #[test]
     fn grain_kept_where_votes_disagree_and_untouched_where_they_agree() {
         let (rgb, g) = disc_exemplar(96, 96, 1, 7);
-        let pyr = SourcePyramid::build(&rgb, &g, &Params::default(), 6.0, 1);
+        let params = Params::builder().keep_grain(true).build().unwrap();
+        let pyr = SourcePyramid::build(&rgb, &g, &params, 6.0, 1);
         let src = &pyr.levels[0];
         assert!(!src.grain.is_empty());
         let (w, h) = (96, 96);
