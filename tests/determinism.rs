@@ -40,3 +40,37 @@ fn byte_identical_output_at_1_2_3_8_and_16_threads() {
     }
     let _ = std::fs::remove_dir_all(&root);
 }
+
+/// FNV-1a, 64 bits.
+fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
+    bytes.into_iter().fold(0xcbf2_9ce4_8422_2325, |h, b| (h ^ b as u64).wrapping_mul(0x0100_0000_01b3))
+}
+
+/// The engine's output is pinned: the demo's first two frames at half size, one thread, seed 7,
+/// default parameters — the hash of their decoded pixels (not of the PNG bytes, which an
+/// encoder update may change). Many commits change the code without meaning to change the
+/// output ("output unchanged"); this test is what holds them to it.
+///
+/// Update `PINNED` only in a commit that changes the output on purpose, and say so in its
+/// message (the last: the coherence factor κ = 2 by default, issue 13).
+#[test]
+fn engine_output_is_pinned() {
+    const PINNED: u64 = 0x0118_4e22_cc33_546c;
+    let demo = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/demo/waving.json");
+    let a = anim::load(&demo, &LoadOptions { scale: 0.5, ..Default::default() }).unwrap();
+    let out = std::env::temp_dir().join(format!("fm-pinned-{}", std::process::id()));
+    let mut opts = RenderOptions::new(out.clone(), 0..2);
+    opts.params = Params::builder().seed(7).build().unwrap();
+    opts.scale = 0.5;
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    pool.install(|| render::render(&a, &opts, &NoProgress)).unwrap();
+    let mut pixels = Vec::new();
+    for (name, _) in files(&out).iter().filter(|(n, _)| n.ends_with(".png")) {
+        let img = image::open(out.join(name)).unwrap().into_rgba16();
+        pixels.extend(name.bytes());
+        pixels.extend(img.as_raw().iter().flat_map(|v| v.to_le_bytes()));
+    }
+    let _ = std::fs::remove_dir_all(&out);
+    let hash = fnv1a(pixels);
+    assert_eq!(hash, PINNED, "the engine's output changed: {hash:#018x}");
+}

@@ -41,8 +41,7 @@ fn exemplar_against_itself_scores_identity() {
     assert_eq!(s.edge_darkening_ratio, Some(1.0));
     assert_eq!(s.incoherent_change_ratio, Some(1.0));
     assert_eq!(s.edge_darkening, r.exemplar.edge_darkening);
-    // Against the exemplar's colors mixed per depth: 0 up to rounding.
-    assert!(s.palette_distance.unwrap().iter().all(|&d| d < 1e-9), "{:?}", s.palette_distance);
+    assert_eq!(s.palette_distance, Some([0.0; 3]));
     assert_eq!(s.motion_agreement, r.exemplar.motion_agreement);
     // The bloom's paint flows outward with its growing mask.
     assert!(s.motion_agreement.unwrap() > 0.5, "{:?}", s.motion_agreement);

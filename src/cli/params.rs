@@ -32,7 +32,7 @@ pub struct SynthFlags {
     #[arg(long, value_name = "L")]
     pub lambda: Option<f32>,
     /// Coherence factor κ: a random PatchMatch candidate must be κ times better than the
-    /// current match (1 = plain PatchMatch; 2 keeps more texture on moving shapes) [default: 1].
+    /// current match (1 = plain PatchMatch, the paper; 2 keeps more texture) [default: 2].
     #[arg(long, value_name = "K")]
     pub coherence: Option<f32>,
     /// Temporal radius r of the occurrence boxes, frames [default: 5].

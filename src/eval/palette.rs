@@ -122,7 +122,12 @@ impl ColorHistogram {
                     *c += h.bins[k][ch];
                     fb += w / total * (*c as f64 / h.count as f64);
                 }
-                acc += (ca as f64 / na - fb).abs();
+                // Differences below 1e-12 are the rounding of the weighted sum (one pixel in a
+                // trillion): the exemplar's own colors score exactly 0.
+                let d = (ca as f64 / na - fb).abs();
+                if d > 1e-12 {
+                    acc += d;
+                }
             }
             *o = (acc / (HISTOGRAM_BINS - 1) as f64) as f32;
         }

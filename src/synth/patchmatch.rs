@@ -256,12 +256,14 @@ impl<'a> Ctx<'a> {
                 && best.flip == flip
         };
         let todo = [!same(opts[0]), n == 2 && !same(opts[1])];
+        // A candidate must get below best.err / κ to win: its error stops being summed there.
+        let bound = best.err / coh;
         if todo == [true, true] {
             // Both options of the rule (M and −M flipped) read the same 25 source pixels: one
             // pass gives both errors. The aligned one wins ties, as if tried first.
             stats.evaluations += 2;
             let (c, s, _) = opts[0];
-            let (ea, ef) = patch_error_pair(self.src, self.feat, win, Center { i, cx: x, cy: y, c, s }, best.err);
+            let (ea, ef) = patch_error_pair(self.src, self.feat, win, Center { i, cx: x, cy: y, c, s }, bound);
             keep(best, opts[0], ea);
             keep(best, opts[1], ef);
             return;
@@ -269,7 +271,7 @@ impl<'a> Ctx<'a> {
         for (&opt, _) in opts.iter().zip(todo).filter(|&(_, t)| t) {
             stats.evaluations += 1;
             let (c, s, flip) = opt;
-            let e = patch_error(self.src, self.feat, win, Center { i, cx: x, cy: y, c, s }, flip, best.err);
+            let e = patch_error(self.src, self.feat, win, Center { i, cx: x, cy: y, c, s }, flip, best.err / coh);
             keep(best, opt, e);
         }
     }
