@@ -103,3 +103,36 @@ fn inspect_writes_guide_previews() {
     assert!(levels.len() >= 5, "{levels:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A layer drawn with strokes alone has no fill region to paint into, and `inspect` says so.
+#[test]
+fn inspect_names_a_stroke_only_layer() {
+    let path = std::env::temp_dir().join(format!("fm-cli-strokes-{}.json", std::process::id()));
+    let rect = |ty: &str, extra: &str| {
+        format!(
+            r#"{{"ty":"gr","it":[{{"ty":"rc","p":{{"a":0,"k":[50,50]}},"s":{{"a":0,"k":[40,40]}},"r":{{"a":0,"k":0}}}},
+               {{"ty":"{ty}","c":{{"a":0,"k":[0.2,0.4,0.8,1]}},"o":{{"a":0,"k":100}}{extra}}},
+               {{"ty":"tr","p":{{"a":0,"k":[0,0]}},"a":{{"a":0,"k":[0,0]}},"s":{{"a":0,"k":[100,100]}},"r":{{"a":0,"k":0}},"o":{{"a":0,"k":100}}}}]}}"#
+        )
+    };
+    let layer = |ind: u32, name: &str, shape: String| {
+        format!(
+            r#"{{"ty":4,"ind":{ind},"nm":"{name}","ip":0,"op":10,"st":0,
+               "ks":{{"o":{{"a":0,"k":100}},"r":{{"a":0,"k":0}},"p":{{"a":0,"k":[0,0]}},"a":{{"a":0,"k":[0,0]}},"s":{{"a":0,"k":[100,100]}}}},
+               "shapes":[{shape}]}}"#
+        )
+    };
+    let json = format!(
+        r#"{{"v":"5.7.0","fr":24,"ip":0,"op":10,"w":100,"h":100,"layers":[{},{}]}}"#,
+        layer(1, "outline", rect("st", r#","w":{"a":0,"k":4},"lc":1,"lj":1"#)),
+        layer(2, "body", rect("fl", ""))
+    );
+    std::fs::write(&path, json).unwrap();
+    let out = bin().arg("inspect").arg(&path).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let line = |name: &str| text.lines().find(|l| l.contains(name)).unwrap_or_default().to_string();
+    assert!(line("outline").contains("strokes only"), "{text}");
+    assert!(!line("body").contains("strokes"), "{text}");
+    let _ = std::fs::remove_file(&path);
+}

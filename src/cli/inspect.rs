@@ -251,7 +251,12 @@ pub fn run(args: Args, ctx: &Ctx) -> anyhow::Result<()> {
             hex(r.color),
             frames_label(&r.visible),
             s.mean_coverage * 100.0,
-            if r.has_strokes { "  +strokes" } else { "" }
+            match (r.has_strokes, s.mean_coverage > 0.0) {
+                (true, true) => "  +strokes",
+                // Regions are the fills: a layer of strokes alone has nothing to paint into.
+                (true, false) => "  strokes only: no fill to stylize (--strokes keep|stylize|drop)",
+                _ => "",
+            }
         )?;
         for w in &r.warnings {
             writeln!(out, "        warning: {w}")?;
