@@ -205,8 +205,8 @@ impl<'a> Reader<'a> {
     }
 }
 
-/// 64-bit FNV-1a.
-struct Fnv(u64);
+/// 64-bit FNV-1a (the crate's one; `resume` fingerprints with it too).
+pub(crate) struct Fnv(pub(crate) u64);
 
 impl Default for Fnv {
     fn default() -> Self {
@@ -215,7 +215,7 @@ impl Default for Fnv {
 }
 
 impl Fnv {
-    fn bytes(&mut self, b: &[u8]) {
+    pub(crate) fn bytes(&mut self, b: &[u8]) {
         for &x in b {
             self.0 = (self.0 ^ x as u64).wrapping_mul(0x0000_0100_0000_01b3);
         }
