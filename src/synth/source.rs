@@ -58,6 +58,19 @@ impl Quant {
         std::array::from_fn(|k| w[k] * self.scale[k] * self.scale[k])
     }
 }
+/// Bilinear interpolation of the first four lanes of the 2 × 2 block whose top-left pixel is
+/// `base` (rows `stride` apart), at fractions (fx, fy): one bounds check for the block, 4-lane
+/// arithmetic that vectorizes.
+#[inline(always)]
+fn bilerp4<const N: usize>(px: &[[u8; N]], base: usize, stride: usize, fx: f32, fy: f32) -> [f32; 4] {
+    let quad = &px[base..=base + stride + 1];
+    let p = |k: usize| -> [f32; 4] { std::array::from_fn(|c| quad[k][c] as f32) };
+    let (a, b, c, d) = (p(0), p(1), p(stride), p(stride + 1));
+    let top: [f32; 4] = std::array::from_fn(|c| a[c] + (b[c] - a[c]) * fx);
+    let bot: [f32; 4] = std::array::from_fn(|k| c[k] + (d[k] - c[k]) * fx);
+    std::array::from_fn(|c| top[c] + (bot[c] - top[c]) * fy)
+}
+
 /// Padding around every source frame: rotated windows around a valid center (≥ `MARGIN` px
 /// from the border) plus the bilinear neighbour never leave the padded frame.
 pub(crate) const PAD: usize = 4;
@@ -276,13 +289,8 @@ impl SourceLevel {
     #[inline(always)]
     pub fn sample_rgb(&self, i: usize, x: f32, y: f32) -> Rgb {
         let (base, fx, fy) = self.bilinear_at(i, x, y);
-        // One bounds check for the 2 × 2 block; 4-lane arithmetic that vectorizes.
-        let quad = &self.feat[base..=base + self.stride + 1];
-        let p = |k: usize| -> [f32; 4] { std::array::from_fn(|c| quad[k][c] as f32) };
-        let (a, b, c, d) = (p(0), p(1), p(self.stride), p(self.stride + 1));
-        let top: [f32; 4] = std::array::from_fn(|c| a[c] + (b[c] - a[c]) * fx);
-        let bot: [f32; 4] = std::array::from_fn(|k| c[k] + (d[k] - c[k]) * fx);
-        std::array::from_fn(|c| (top[c] + (bot[c] - top[c]) * fy) * (1.0 / 255.0))
+        let v = bilerp4(&self.feat, base, self.stride, fx, fy);
+        std::array::from_fn(|c| v[c] * (1.0 / 255.0))
     }
 
     /// Bilinear sample of [`SourceLevel::grain`] at (x, y) of frame i: the low-pass color
@@ -290,12 +298,7 @@ impl SourceLevel {
     #[inline(always)]
     pub fn sample_grain(&self, i: usize, x: f32, y: f32) -> ([f32; 3], f32) {
         let (base, fx, fy) = self.bilinear_at(i, x, y);
-        let quad = &self.grain[base..=base + self.stride + 1];
-        let p = |k: usize| -> [f32; 4] { std::array::from_fn(|c| quad[k][c] as f32) };
-        let (a, b, c, d) = (p(0), p(1), p(self.stride), p(self.stride + 1));
-        let top: [f32; 4] = std::array::from_fn(|c| a[c] + (b[c] - a[c]) * fx);
-        let bot: [f32; 4] = std::array::from_fn(|k| c[k] + (d[k] - c[k]) * fx);
-        let v: [f32; 4] = std::array::from_fn(|c| top[c] + (bot[c] - top[c]) * fy);
+        let v = bilerp4(&self.grain, base, self.stride, fx, fy);
         ([v[0] / 255.0, v[1] / 255.0, v[2] / 255.0], v[3] / GRAIN_STD_UNIT)
     }
 

@@ -51,6 +51,31 @@ fn taps(sigma: f32) -> Vec<((isize, isize), f32)> {
         .collect()
 }
 
+/// The voters of pixel (x, y): each valid neighbour match whose patch covers it, with the
+/// source position its patch puts on the pixel and its tap weight. The neighbour centered at
+/// (x − a, y − b) covers the pixel at its offset (a, b).
+#[inline(always)]
+fn voters<'a>(
+    nnf: &'a Nnf,
+    taps: &'a [((isize, isize), f32)],
+    x: usize,
+    y: usize,
+) -> impl Iterator<Item = (&'a super::nnf::Match, f32, f32, f32)> + 'a {
+    let (w, h) = (nnf.w as isize, nnf.h as isize);
+    taps.iter().filter_map(move |&((a, b), wt)| {
+        let (nx, ny) = (x as isize - a, y as isize - b);
+        if nx < 0 || ny < 0 || nx >= w || ny >= h {
+            return None;
+        }
+        let m = &nnf.data[ny as usize * w as usize + nx as usize];
+        if !m.ok {
+            return None;
+        }
+        let (dx, dy) = m.rotate(a as f32, b as f32);
+        Some((m, m.x + dx, m.y + dy, wt))
+    })
+}
+
 /// [`vote_row`] compiled for AVX2, with the AVX2 samplers (the same results).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
@@ -78,25 +103,15 @@ fn vote_row(
     row: &mut [Rgb],
     sample: impl Fn(usize, f32, f32) -> Rgb,
 ) {
-    let (w, h) = (nnf.w, nnf.h);
+    let w = nnf.w;
     for (x, o) in row.iter_mut().enumerate() {
         if !nnf.data[y * w + x].ok {
             continue;
         }
         let mut acc = [0.0f32; 3];
         let mut n = 0.0f32;
-        for &((a, b), wt) in taps {
-            // The neighbour centered at (x − a, y − b) covers this pixel at its offset (a, b).
-            let (nx, ny) = (x as isize - a, y as isize - b);
-            if nx < 0 || ny < 0 || nx >= w as isize || ny >= h as isize {
-                continue;
-            }
-            let m = &nnf.data[ny as usize * w + nx as usize];
-            if !m.ok {
-                continue;
-            }
-            let (dx, dy) = m.rotate(a as f32, b as f32);
-            let c = sample(m.i as usize, m.x + dx, m.y + dy);
+        for (m, sx, sy, wt) in voters(nnf, taps, x, y) {
+            let c = sample(m.i as usize, sx, sy);
             acc[0] += wt * c[0];
             acc[1] += wt * c[1];
             acc[2] += wt * c[2];
@@ -133,17 +148,7 @@ pub(crate) fn vote_grain(src: &SourceLevel, nnf: &Nnf, fill: Rgb, sigma: f32) ->
             }
             votes.clear();
             let (mut low, mut g, mut var, mut n, mut n2) = ([0.0f32; 3], [0.0f32; 3], 0.0f32, 0.0f32, 0.0f32);
-            for &((a, b), wt) in &taps {
-                let (nx, ny) = (x as isize - a, y as isize - b);
-                if nx < 0 || ny < 0 || nx >= w as isize || ny >= h as isize {
-                    continue;
-                }
-                let m = &nnf.data[ny as usize * w + nx as usize];
-                if !m.ok {
-                    continue;
-                }
-                let (dx, dy) = m.rotate(a as f32, b as f32);
-                let (sx, sy) = (m.x + dx, m.y + dy);
+            for (m, sx, sy, wt) in voters(nnf, &taps, x, y) {
                 let c = src.sample_rgb_cubic(m.i as usize, sx, sy);
                 let (l, sd) = src.sample_grain(m.i as usize, sx, sy);
                 let gi = [c[0] - l[0], c[1] - l[1], c[2] - l[2]];
