@@ -80,6 +80,16 @@ impl DepthProfile {
         DepthProfile { contrast, hist, stand_in }
     }
 
+    /// The exemplar's contrast and colors over its whole interior, whatever the depths (the
+    /// bins merged).
+    pub(crate) fn whole(&self) -> (Mean, ColorHistogram) {
+        let mut hist = ColorHistogram::new();
+        for h in &self.hist {
+            hist.merge(h);
+        }
+        (self.contrast.iter().fold(Mean::default(), |a, &b| a.merged(b)), hist)
+    }
+
     /// The exemplar's contrast at the depths of `bins` (the output's contrast samples per bin).
     pub(crate) fn contrast(&self, bins: &[Mean]) -> Option<f32> {
         let (mut sum, mut n) = (0f64, 0f64);

@@ -11,8 +11,7 @@ use super::temporal::frame_change_mean;
 use super::{
     ColorHistogram, EvalOptions, ExemplarSummary, FrameStats, Mean, Measure, Painted, PatchIndex, Report, Shape,
     Summary, check, composite_output, detect_painted, edge_darkening, edge_darkening_seq, incoherent_change,
-    intersection_union, local_contrast_seq, luma_plane, motion_agreement, painted_mask, ratio, stationary_interior,
-    temporal_change, timed,
+    intersection_union, luma_plane, motion_agreement, painted_mask, ratio, stationary_interior, temporal_change, timed,
 };
 use crate::error::{Error, Result};
 use crate::exemplar::Exemplar;
@@ -44,11 +43,12 @@ pub struct Reference {
     frames: Vec<Plane<Rgb>>,
     masks: Vec<Plane<f32>>,
     regions: Vec<Mask>,
-    contrast: Measure,
     temporal: Measure,
     motion: Measure,
     rim: Measure,
     coherence: Measure,
+    /// Contrast and colors over the whole interior (from `depth`).
+    contrast: Option<f32>,
     hist: ColorHistogram,
     depth: DepthProfile,
 }
@@ -71,16 +71,14 @@ impl Reference {
         let shapes = timed("exemplar distance fields", || Shape::sequence(&masks));
         let regions: Vec<Mask> = shapes.par_iter().map(|s| s.interior(options.interior_margin)).collect();
         let lumas: Vec<Plane<f32>> = frames.par_iter().map(luma_plane).collect();
-        let contrast = timed("exemplar contrast", || local_contrast_seq(&frames, &regions));
         let temporal = timed("exemplar temporal change", || temporal_change(&frames, &shapes, &options.temporal));
         let motion = timed("exemplar motion", || motion_agreement(&lumas, &shapes, &options.motion));
         let rim = timed("exemplar edge darkening", || edge_darkening_seq(&frames, &shapes, &options.rim));
         let coherence = timed("exemplar incoherent change", || incoherent_change(&lumas, &shapes, &options.coherence));
-        let mut hist = ColorHistogram::new();
-        for (f, r) in frames.iter().zip(&regions) {
-            hist.add_masked(f, r);
-        }
+        // Contrast and colors per depth, and over the whole interior from the same pass.
         let depth = timed("exemplar depth profile", || DepthProfile::new(&frames, &shapes, &regions));
+        let (contrast, hist) = depth.whole();
+        let contrast = contrast.value();
         Ok(Reference {
             name: exemplar.meta.name.clone(),
             step,
@@ -127,7 +125,7 @@ impl Reference {
             height: self.frames[0].height(),
             step: self.step,
             scale: self.scale,
-            local_contrast: self.contrast.value,
+            local_contrast: self.contrast,
             temporal_change: self.temporal.value,
             motion_agreement: self.motion.value,
             edge_darkening: self.rim.value,
@@ -145,8 +143,7 @@ impl Reference {
 struct FrameTotals {
     /// Intersection and union of the painted area with the target mask.
     coverage: (u64, u64),
-    contrast: Mean,
-    /// `contrast` per depth bin, and the interior's pixels per depth bin.
+    /// The local contrast per depth bin, and the interior's pixels per depth bin.
     contrast_bins: Vec<Mean>,
     region_bins: Vec<u64>,
     hist: ColorHistogram,
@@ -155,6 +152,13 @@ struct FrameTotals {
     motion: Mean,
     rim: Option<f32>,
     coherence: (Option<f32>, u64),
+}
+
+impl FrameTotals {
+    /// The local contrast over all depths.
+    fn contrast(&self) -> Mean {
+        self.contrast_bins.iter().fold(Mean::default(), |a, &b| a.merged(b))
+    }
 }
 
 /// The last frame of the previous batch, for the measures of consecutive pairs.
@@ -253,7 +257,6 @@ impl<'a> Evaluator<'a> {
                     local_contrast_binned(&rgb[i], &region, DEPTH_BINS, |x, y| depth_bin(shape.sdf.get(x, y)));
                 FrameTotals {
                     coverage: intersection_union(&painted_mask(&output[i], &self.painted), &shape.mask),
-                    contrast: contrast_bins.iter().fold(Mean::default(), |a, &b| a.merged(b)),
                     region_bins: region_bins(shape, &region),
                     contrast_bins,
                     hist: ColorHistogram::of_region(&rgb[i], &region),
@@ -289,7 +292,7 @@ impl<'a> Evaluator<'a> {
         let frames = &self.frames[range.clone()];
         let r = self.reference;
         let pooled = |f: fn(&FrameTotals) -> Mean| Measure::from_means(&frames.iter().map(f).collect::<Vec<_>>());
-        let contrast = pooled(|t| t.contrast);
+        let contrast = pooled(FrameTotals::contrast);
         let patches = pooled(|t| t.patches);
         let temporal = pooled(|t| t.temporal);
         let motion = pooled(|t| t.motion);
@@ -317,8 +320,8 @@ impl<'a> Evaluator<'a> {
             .map(|(k, t)| FrameStats {
                 frame: range.start + k + 1,
                 coverage_iou: coverage.per_frame[k],
-                local_contrast: t.contrast.value(),
-                contrast_ratio: ratio(t.contrast.value(), r.depth.contrast(&t.contrast_bins)),
+                local_contrast: t.contrast().value(),
+                contrast_ratio: ratio(t.contrast().value(), r.depth.contrast(&t.contrast_bins)),
                 palette_distance: r.depth.palette(&t.hist, &t.region_bins),
                 patch_nn_distance: t.patches.value(),
                 temporal_change: t.temporal.value(),
@@ -334,7 +337,7 @@ impl<'a> Evaluator<'a> {
             coverage_iou: coverage.value,
             local_contrast: contrast.value,
             contrast_ratio: ratio(contrast.value, r.depth.contrast(&contrast_bins)),
-            contrast_ratio_whole: ratio(contrast.value, r.contrast.value),
+            contrast_ratio_whole: ratio(contrast.value, r.contrast),
             palette_distance: palette,
             palette_distance_mean: palette.map(|p| (p[0] + p[1] + p[2]) / 3.0),
             palette_distance_whole: palette_whole.map(|p| (p[0] + p[1] + p[2]) / 3.0),

@@ -80,25 +80,9 @@ impl ColorHistogram {
     /// Per-channel Wasserstein-1 distance `∫ |F_a(x) − F_b(x)| dx` between the two binned
     /// distributions (in `0..=1` color units); `None` if either is empty.
     pub fn wasserstein(&self, other: &ColorHistogram) -> Option<[f32; 3]> {
-        if self.is_empty() || other.is_empty() {
-            return None;
-        }
-        let (na, nb) = (self.count as f64, other.count as f64);
-        let mut out = [0f32; 3];
-        for (ch, o) in out.iter_mut().enumerate() {
-            let (mut ca, mut cb, mut acc) = (0u64, 0u64, 0f64);
-            for k in 0..HISTOGRAM_BINS - 1 {
-                ca += self.bins[k][ch];
-                cb += other.bins[k][ch];
-                acc += (ca as f64 / na - cb as f64 / nb).abs();
-            }
-            *o = (acc / (HISTOGRAM_BINS - 1) as f64) as f32;
-        }
-        Some(out)
+        self.wasserstein_mixture(&[(other, 1.0)])
     }
-}
 
-impl ColorHistogram {
     /// [`ColorHistogram::wasserstein`] to the mixture of `parts`, each histogram normalized
     /// and weighted by its weight; `None` if this one is empty or no part has both colors and
     /// weight.
@@ -122,8 +106,8 @@ impl ColorHistogram {
                     *c += h.bins[k][ch];
                     fb += w / total * (*c as f64 / h.count as f64);
                 }
-                // Differences below 1e-12 are the rounding of the weighted sum (one pixel in a
-                // trillion): the exemplar's own colors score exactly 0.
+                // Differences below 1e-12 are the rounding of the weighted sum (a part's share
+                // of one pixel in a trillion): the exemplar's own colors score exactly 0.
                 let d = (ca as f64 / na - fb).abs();
                 if d > 1e-12 {
                     acc += d;
