@@ -46,20 +46,22 @@ fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
     bytes.into_iter().fold(0xcbf2_9ce4_8422_2325, |h, b| (h ^ b as u64).wrapping_mul(0x0100_0000_01b3))
 }
 
-/// The engine's output is pinned: the demo's first two frames at half size, one thread, seed 7,
+/// The engine's output is pinned: the demo's first four frames at half size, one thread, seed 7,
 /// default parameters — the hash of their decoded pixels (not of the PNG bytes, which an
 /// encoder update may change). Many commits change the code without meaning to change the
-/// output ("output unchanged"); this test is what holds them to it.
+/// output ("output unchanged"); this test is what holds them to it. Four frames, so that the
+/// carried-over field (SHIFTNNF and its advection) is covered: with two, a change of the
+/// advection went unseen.
 ///
 /// Update `PINNED` only in a commit that changes the output on purpose, and say so in its
-/// message (the last: the coherence factor κ = 2 by default, issue 13).
+/// message (the last: advection warps the field along the target's motion, issue 13).
 #[test]
 fn engine_output_is_pinned() {
-    const PINNED: u64 = 0x0118_4e22_cc33_546c;
+    const PINNED: u64 = 0xe48d_0327_6c99_2a2f;
     let demo = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/demo/waving.json");
     let a = anim::load(&demo, &LoadOptions { scale: 0.5, ..Default::default() }).unwrap();
     let out = std::env::temp_dir().join(format!("fm-pinned-{}", std::process::id()));
-    let mut opts = RenderOptions::new(out.clone(), 0..2);
+    let mut opts = RenderOptions::new(out.clone(), 0..4);
     opts.params = Params::builder().seed(7).build().unwrap();
     opts.scale = 0.5;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();

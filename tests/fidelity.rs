@@ -50,21 +50,20 @@ fn check(what: &str, value: Option<f32>, floor: f32, higher: bool, failures: &mu
 /// Moving targets at the size users run (512², 24 frames), two exemplars with different rims.
 ///
 /// Measured (`quality -e blue-bloom -e ink-rims --target growing --target translating
-/// --frames 24`, κ = 2): IoU of the alpha 0.996–0.997, contrast 0.68–0.83 (of the exemplar's
-/// at the same depths), edge darkening 0.64–0.85, palette 0.007–0.084, incoherent change
-/// 0.92–1.07, motion agreement 0.61–0.69. With κ = 1 (the engine before) contrast was
-/// 0.63–0.80, which fails the contrast floor on blue-bloom. Before the fidelity work the same
-/// targets (48 frames, README) scored IoU α 0.92–0.94, edge darkening −0.27–0.27 and
-/// incoherent change 1.22–2.0: those floors fail on that engine.
+/// --frames 24`, κ = 2, advection by warping the field): IoU of the alpha 0.996–0.997,
+/// contrast 0.70–0.79 (of the exemplar's at the same depths), edge darkening 0.62–0.82,
+/// palette 0.007–0.075, incoherent change 0.76–0.84, motion agreement 0.61–0.69. With κ = 1
+/// contrast was 0.63–0.80, which fails the contrast floor on blue-bloom; with the advection
+/// that moved each match in the exemplar by its own rest, incoherent change was 0.92–1.07,
+/// which fails its floor. Before the fidelity work the same targets (48 frames, README)
+/// scored IoU α 0.92–0.94, edge darkening −0.27–0.27 and incoherent change 1.22–2.0.
 ///
 /// The floors are reached for coverage, incoherent change (≤ 1.2) and motion
-/// agreement (≥ 0.6); not yet for contrast (0.85: measured 0.68–0.83), edge darkening of
-/// blue-bloom and ink-rims growing (0.8: measured 0.64–0.78) and the palette of ink-rims (0.03:
-/// 0.066–0.084). The floors below are the measured values less a margin (~0.05–0.1; the
-/// spread between seeds and targets is ~0.05), except contrast: 0.66 against the measured
-/// 0.68, close enough to catch a return to κ = 1 (0.63); the palette's was 0.08 against the exemplar's
-/// whole interior and κ = 1 (measured 0.063), and is 0.095 against the depth-matched palette
-/// with κ = 2 (measured 0.084).
+/// agreement (≥ 0.6); not yet for contrast (0.85: measured 0.70–0.79), edge darkening of
+/// blue-bloom growing (0.8: measured 0.62) and the palette of ink-rims (0.03: 0.066–0.075).
+/// The floors below are the measured values less a margin (~0.05–0.1; the spread between
+/// seeds and targets is ~0.05): contrast 0.66 against 0.70, edge darkening 0.56 against 0.62,
+/// palette 0.09 against 0.075, incoherent change 0.95 against 0.84, motion 0.55 against 0.61.
 #[test]
 fn moving_targets_keep_the_rim_texture_and_coherence() {
     let report = suite(SuiteOptions {
@@ -81,8 +80,8 @@ fn moving_targets_keep_the_rim_texture_and_coherence() {
         check(&name("IoU α"), r.coverage_alpha, 0.98, true, &mut failures);
         check(&name("contrast"), s.contrast_ratio, 0.66, true, &mut failures);
         check(&name("edge darkening"), s.edge_darkening_ratio, 0.56, true, &mut failures);
-        check(&name("palette"), s.palette_distance_mean, 0.095, false, &mut failures);
-        check(&name("incoherent change"), s.incoherent_change_ratio, 1.2, false, &mut failures);
+        check(&name("palette"), s.palette_distance_mean, 0.09, false, &mut failures);
+        check(&name("incoherent change"), s.incoherent_change_ratio, 0.95, false, &mut failures);
         check(&name("motion agreement"), s.motion_agreement, 0.55, true, &mut failures);
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
@@ -93,12 +92,15 @@ fn moving_targets_keep_the_rim_texture_and_coherence() {
 /// window, contrast and edge darkening relative to the first window's. At half size (256²,
 /// the exemplar scaled alike) to keep the test under two minutes.
 ///
-/// Measured (`quality -e ink-rims -e blue-bloom --target long --scale 0.5`, κ = 2): ink-rims
-/// contrast 0.86–0.97 and rim 1.00–1.11 of the first window; blue-bloom contrast 0.79–0.93
-/// and rim 0.83–0.89 (its first window has the young bloom's strong rim, which then
-/// settles); over the whole run contrast 0.58 and 0.49, edge darkening 1.18 and 0.77. The
-/// issue's floor (0.9 in every window) is reached by ink-rims' rim only; the floors here are
-/// the measured minima less 0.06–0.1.
+/// Measured (`quality -e ink-rims -e blue-bloom --target long --scale 0.5`, κ = 2, advection
+/// by warping the field): ink-rims contrast 0.82–0.97 and rim 0.96–1.06 of the first window;
+/// blue-bloom contrast 0.77–0.99 and rim 0.76–0.90 (its first window has the young bloom's
+/// strong rim, which then settles); over the whole run contrast 0.54 and 0.46, edge darkening
+/// 1.16 and 0.76. The floor (0.9 in every window) is reached by ink-rims' rim only.
+/// The warp keeps the field's pieces whole (the moving targets' incoherent change fell from
+/// 0.92–1.07 to 0.76–0.84) but the paint it carries longer fades a little more: with the
+/// previous advection the minima were ink-rims 0.86/1.00 and blue-bloom 0.79/0.83, and the
+/// floors were 0.8/0.9 and 0.72/0.75. The floors here are the new minima less 0.06–0.07.
 #[test]
 fn long_target_keeps_its_paint_in_every_window() {
     let report = suite(SuiteOptions {
@@ -108,7 +110,7 @@ fn long_target_keeps_its_paint_in_every_window() {
         scale: 0.5,
         ..SuiteOptions::default()
     });
-    let floors = [("ink-rims", 0.8, 0.9), ("blue-bloom", 0.72, 0.75)];
+    let floors = [("ink-rims", 0.76, 0.9), ("blue-bloom", 0.71, 0.7)];
     let mut failures = Vec::new();
     for (r, (name, contrast, rim)) in report.rows.iter().zip(floors) {
         assert_eq!((r.exemplar.as_str(), r.frames, r.windows.len()), (name, 300, 6));

@@ -379,8 +379,9 @@ impl ParamsBuilder {
     /// Residual advection in SHIFTNNF: the part of the target's motion over one frame that
     /// the exemplar's own evolution (the time shift Δi) does not supply — because the target
     /// moves faster than the paint, or the exemplar has run out of frames — is carried by
-    /// moving the match upstream along the target flow. Off = the paper's SHIFTNNF alone.
-    /// Default: on.
+    /// warping the field along the target flow (a pixel takes the match of the pixel that far
+    /// upstream), and matches in the border band are re-anchored to the target's distance from
+    /// the edge. Off = the paper's SHIFTNNF alone. Default: on.
     pub fn advect(mut self, on: bool) -> Self {
         self.p.advect = on;
         self

@@ -46,6 +46,39 @@ pub(crate) fn step_cost(ext_scale: f32, frames: usize) -> f32 {
     (0.25 * ext_scale / frames.max(1) as f32).max(TIE_BREAK)
 }
 
+/// The time step of match m under the target's extent change `dt` (see [`shift_nnf`]): the
+/// new frame index i + Δi and the motion the exemplar supplies by it, `|S^ext(i+Δi) − S^ext(i)|`
+/// at the match (ext+ for aligned flows, ext− for opposite ones); `c` is the cost of one frame
+/// off the nominal step. `None` where the match is outside the exemplar.
+fn time_step(src: &SourceLevel, m: &Match, dt: f32, c: f32) -> Option<(usize, f32)> {
+    let i = m.i as usize;
+    let (idx0, _) = src.info_at(i, m.x, m.y)?;
+    let pix = idx0 - i * src.frame_len;
+    let val = |k: usize| {
+        let inf = &src.info[k * src.frame_len + pix];
+        if m.flip { inf.ext_neg } else { inf.ext_pos }
+    };
+    let base = val(i);
+    let nominal_step = if m.flip { 0 } else { 1 };
+    let cost = |k: usize| (dt - (val(k) - base)).abs() + c * k.abs_diff(i).abs_diff(nominal_step) as f32;
+    let mut best_i = if m.flip || i + 1 >= src.frames { i } else { i + 1 };
+    let mut best = cost(best_i);
+    let mut consider = |k: usize| {
+        let d = cost(k);
+        if d < best {
+            best = d;
+            best_i = k;
+        }
+    };
+    consider(i);
+    if m.flip {
+        (0..i).rev().for_each(&mut consider);
+    } else {
+        (i + 1..src.frames).for_each(&mut consider);
+    }
+    Some((best_i, (val(best_i) - base).abs()))
+}
+
 /// SHIFTNNF (paper §3.4), extended.
 ///
 /// For a match (i, x, y) with aligned flows, Δi ≥ 0 minimizes
@@ -56,13 +89,22 @@ pub(crate) fn step_cost(ext_scale: f32, frames: usize) -> f32 {
 /// none for opposite flows (time runs backwards only as far as the motion asks). The paper's
 /// rule is `c → 0`; with advection `c` = [`step_cost`].
 ///
-/// Then, with [`ShiftInputs::advect`]: the motion the time shift did not supply is carried —
-/// the match moves upstream along the target flow by the rest, so the target pixel shows what
-/// was that far behind it (the exemplar's evolution carries as much of the motion as it can,
-/// advection the rest; when the exemplar runs out of frames, all of it) — and within the
-/// border band the match is re-anchored to the target's distance from the edge.
+/// Then, with [`ShiftInputs::advect`]: the motion the time shift did not supply is carried by
+/// warping the field — the target pixel q takes the shifted match of the previous frame's
+/// pixel `p = q − rest·f̂` (f the target flow, `rest` the motion beyond what the exemplar's
+/// evolution supplied at q's match), offset by `M·(p − ⌊p⌉)` for the sub-pixel part: q shows
+/// what was that far behind it (the exemplar's evolution carries as much of the motion as it
+/// can, the warp the rest; when the exemplar runs out of frames, all of it). Where `⌊p⌉` had
+/// no match (paint that was not there), q's own match is moved upstream in the exemplar by
+/// `M·rest·f̂` instead. Within a coherent piece of the field the two are the same; across
+/// pieces the warp keeps each piece whole — moving every match in the exemplar by its own
+/// rest cuts the pieces (measured: 0.56–0.61 of neighbouring pixels continue each other's
+/// match after a translating frame, 0.36–0.45 after the shift) and leaves matches travelling
+/// across the exemplar for as long as the shape moves. Last, within the border band the
+/// match is re-anchored to the target's distance from the edge.
 pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
     let src = inp.src;
+    let c = if inp.advect { inp.step_cost } else { TIE_BREAK };
     let mut out = Nnf::new(prev.w, prev.h);
     out.data.par_iter_mut().enumerate().for_each(|(q, o)| {
         let m = &prev.data[q];
@@ -74,51 +116,38 @@ pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
             return;
         }
         let dt = inp.ext_cur[q] - inp.ext_prev[q];
-        let i = m.i as usize;
-        let Some((idx0, _)) = src.info_at(i, m.x, m.y) else {
+        let Some((best_i, supplied)) = time_step(src, m, dt, c) else {
             *o = *m;
             return;
         };
-        let pix = idx0 - i * src.frame_len;
-        let val = |k: usize| {
-            let inf = &src.info[k * src.frame_len + pix];
-            if m.flip { inf.ext_neg } else { inf.ext_pos }
-        };
-        let base = val(i);
-        let nominal_step = if m.flip { 0 } else { 1 };
-        let c = if inp.advect { inp.step_cost } else { TIE_BREAK };
-        let cost = |k: usize| (dt - (val(k) - base)).abs() + c * k.abs_diff(i).abs_diff(nominal_step) as f32;
-        let mut best_i = if m.flip || i + 1 >= src.frames { i } else { i + 1 };
-        let mut best = cost(best_i);
-        let mut consider = |k: usize| {
-            let d = cost(k);
-            if d < best {
-                best = d;
-                best_i = k;
-            }
-        };
-        consider(i);
-        if m.flip {
-            (0..i).rev().for_each(&mut consider);
-        } else {
-            (i + 1..src.frames).for_each(&mut consider);
-        }
-        let shifted = Match { i: best_i as u16, err: f32::INFINITY, ..*m };
-        *o = shifted;
+        *o = Match { i: best_i as u16, err: f32::INFINITY, ..*m };
         if !inp.advect {
             return;
         }
-        // The motion the exemplar's own evolution did not supply is carried: the match moves
-        // upstream by the rest, so the target pixel shows what was `rest` pixels behind it.
-        let (mut x, mut y) = (m.x, m.y);
+        // The rest of the motion: the match of the pixel `rest` behind q (the warp), or q's
+        // own match moved upstream by it.
+        let (mut m, mut best_i, (mut x, mut y)) = (*m, best_i, (m.x, m.y));
         let f = inp.flow_prev[q];
         let speed = f.length();
         if speed >= FLOW_EPS {
-            let supplied = (val(best_i) - base).abs();
             let rest = (speed - supplied).clamp(-speed, speed);
-            let (dx, dy) = m.rotate(f.x / speed * rest, f.y / speed * rest);
-            (x, y) = (x - dx, y - dy);
+            let back = f / speed * rest;
+            let p = Vec2::new((q % prev.w) as f32, (q / prev.w) as f32) - back;
+            let r = p.round();
+            let from = (r.x >= 0.0 && r.y >= 0.0 && (r.x as usize) < prev.w && (r.y as usize) < prev.h)
+                .then(|| prev.data[r.y as usize * prev.w + r.x as usize])
+                .filter(|m2| m2.ok)
+                .and_then(|m2| time_step(src, &m2, dt, c).map(|(i2, _)| (m2, i2)));
+            if let Some((m2, i2)) = from {
+                let (dx, dy) = m2.rotate(p.x - r.x, p.y - r.y);
+                (m, best_i, x, y) = (m2, i2, m2.x + dx, m2.y + dy);
+                *o = Match { i: i2 as u16, err: f32::INFINITY, ..m2 };
+            } else {
+                let (dx, dy) = m.rotate(back.x, back.y);
+                (x, y) = (x - dx, y - dy);
+            }
         }
+        let shifted = *o;
         // Near the edge, the match is re-anchored to the target's distance from the edge: the
         // rim of paint travels with the edge. (Flow magnitudes only approximate how far an
         // edge moves, and the small errors of every frame would add up to a lagging, pale rim.)
