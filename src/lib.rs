@@ -30,6 +30,7 @@ pub mod progress;
 pub mod quality;
 pub mod render;
 pub mod resume;
+mod rng;
 pub mod seq;
 pub mod synth;
 pub mod workload;

@@ -7,8 +7,9 @@
 //! bound is not below the best full distance found so far can be skipped without missing the
 //! nearest neighbour. Only the budget of [`PatchParams::checks`] makes the search approximate.
 
-use super::{Mean, Measure, Rng};
+use super::{Mean, Measure};
 use crate::img::{Mask, Plane, Rgb};
+use crate::rng::SplitMix64;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -390,7 +391,7 @@ pub(crate) fn frame_patch_mean(
     if list.is_empty() {
         return Mean::default();
     }
-    let mut rng = Rng::new(seed.wrapping_add(0x9E37_79B9).wrapping_mul(f as u64 + 1));
+    let mut rng = SplitMix64::new(seed.wrapping_add(0x9E37_79B9).wrapping_mul(f as u64 + 1));
     let w = img.width();
     let queries: Vec<(usize, usize)> = (0..samples.min(list.len()))
         .map(|_| {
@@ -418,7 +419,7 @@ mod tests {
 
     #[test]
     fn tree_search_equals_brute_force_with_enough_checks() {
-        let mut rng = Rng::new(5);
+        let mut rng = SplitMix64::new(5);
         let mut rnd = move || (rng.next_u64() >> 40) as f32 / (1u64 << 24) as f32;
         let frames: Vec<Plane<Rgb>> = (0..2)
             .map(|_| {

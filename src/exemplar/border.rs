@@ -229,7 +229,7 @@ mod tests {
 
     #[test]
     fn edt_matches_brute_force() {
-        let mut s = crate::exemplar::rng::SplitMix64::new(3);
+        let mut s = crate::rng::SplitMix64::new(3);
         for (w, h) in [(1, 1), (7, 3), (13, 11), (20, 20)] {
             let mask: Vec<bool> = (0..w * h).map(|_| s.next_f32() < 0.4).collect();
             let fast = signed_distance(&mask, w, h);

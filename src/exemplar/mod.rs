@@ -25,7 +25,6 @@ mod bundled;
 pub mod cache;
 pub mod generate;
 pub mod import;
-pub mod rng;
 mod search;
 mod sheet;
 

@@ -30,7 +30,6 @@ mod occurrence;
 mod params;
 mod patch;
 mod patchmatch;
-mod rng;
 mod shift;
 mod source;
 mod target;
@@ -44,10 +43,10 @@ use crate::error::{Error, Result};
 use crate::exemplar::Exemplar;
 use crate::guide::FrameGuides;
 use crate::img::{self, Mask, Plane, Rgb};
+use crate::rng::SplitMix64;
 use nnf::{Match, Nnf, level_count};
 use patchmatch::Ctx;
 use rayon::prelude::*;
-use rng::Rng;
 use source::MARGIN;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -777,7 +776,7 @@ fn repair(ctx: &Ctx, nnf: &mut Nnf) {
                 ctx.check(seg, n.i as usize, cx, cy).map(|_| Match { x: cx, y: cy, err: f32::INFINITY, ..n })
             });
             *m = propagated.unwrap_or_else(|| {
-                let mut rng = Rng::keyed(&[ctx.keys[0], ctx.keys[1], ctx.keys[2], 0x5eed, q as u64]);
+                let mut rng = SplitMix64::keyed(&[ctx.keys[0], ctx.keys[1], ctx.keys[2], 0x5eed, q as u64]);
                 ctx.random_match(q, &mut rng)
             });
         }

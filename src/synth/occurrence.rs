@@ -261,9 +261,9 @@ impl Occurrence {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::rng::SplitMix64;
     use crate::synth::nnf::{Match, offsets};
     use crate::synth::params::Params;
-    use crate::synth::rng::Rng;
     use crate::synth::source::PAD;
     use crate::synth::source::{MARGIN, SourcePyramid};
     use crate::synth::tests::{disc_exemplar, disc_guides};
@@ -271,19 +271,19 @@ mod tests {
     /// A field of random matches (random rotations and sub-pixel centers, some frames near
     /// the ends of the sequence) over every active pixel.
     fn random_field(src: &SourceLevel, tgt: &TargetLevel, seed: u64) -> Nnf {
-        let mut rng = Rng::keyed(&[seed]);
+        let mut rng = SplitMix64::keyed(&[seed]);
         let mut nnf = Nnf::new(tgt.w, tgt.info.len() / tgt.w);
         for &q in &tgt.active {
-            let th = rng.range_f32(-3.1, 3.1);
+            let th = rng.range(-3.1, 3.1);
             nnf.data[q as usize] = Match {
-                x: rng.range_f32(MARGIN as f32, (src.w - 1 - MARGIN) as f32),
-                y: rng.range_f32(MARGIN as f32, (src.h - 1 - MARGIN) as f32),
+                x: rng.range(MARGIN as f32, (src.w - 1 - MARGIN) as f32),
+                y: rng.range(MARGIN as f32, (src.h - 1 - MARGIN) as f32),
                 c: th.cos(),
                 s: th.sin(),
                 err: 0.0,
                 i: rng.below(src.frames) as u16,
                 flip: false,
-                ok: rng.f32() < 0.9,
+                ok: rng.next_f32() < 0.9,
             };
         }
         nnf

@@ -447,21 +447,21 @@ pub(crate) mod tests {
     use super::*;
     use crate::guide::FrameGuides;
     use crate::img::Plane;
+    use crate::rng::SplitMix64;
     use crate::synth::params::Params;
-    use crate::synth::rng::Rng;
     use crate::synth::source::{SourcePyramid, VALID};
     use glam::Vec2;
 
     /// Synthetic guides: a disc of radius `r` with noisy channels.
     pub(crate) fn synthetic(w: usize, h: usize, r: f32, seed: u64) -> (Plane<[f32; 3]>, FrameGuides) {
-        let mut rng = Rng::keyed(&[seed]);
+        let mut rng = SplitMix64::keyed(&[seed]);
         let (cx, cy) = (w as f32 / 2.0, h as f32 / 2.0);
         let dist = Plane::from_fn(w, h, |x, y| r - ((x as f32 - cx).powi(2) + (y as f32 - cy).powi(2)).sqrt());
         let mask = dist.map(|d| d >= 0.0);
         let flow = Plane::from_fn(w, h, |x, y| Vec2::new(x as f32 - cx, y as f32 - cy) * 0.05);
-        let ext_pos = Plane::from_fn(w, h, |_, _| rng.f32() * 5.0);
-        let ext_neg = Plane::from_fn(w, h, |_, _| rng.f32() * 5.0);
-        let rgb = Plane::from_fn(w, h, |_, _| [rng.f32(), rng.f32(), rng.f32()]);
+        let ext_pos = Plane::from_fn(w, h, |_, _| rng.next_f32() * 5.0);
+        let ext_neg = Plane::from_fn(w, h, |_, _| rng.next_f32() * 5.0);
+        let rgb = Plane::from_fn(w, h, |_, _| [rng.next_f32(), rng.next_f32(), rng.next_f32()]);
         (rgb, FrameGuides { mask, dist, flow, ext_pos, ext_neg })
     }
 
@@ -475,13 +475,13 @@ pub(crate) mod tests {
         let src = &pyr.levels[0];
         let (trgb, tg) = synthetic(30, 30, 12.0, 99);
         let mut tgt = TargetLevel::new(&tg, &pyr.quant, 6.0, None, [1.0, 1.0, 1.0]);
-        let mut rng = Rng::keyed(&[5]);
+        let mut rng = SplitMix64::keyed(&[5]);
         for (k, px) in tgt.cur.iter_mut().enumerate() {
             let c = trgb.data()[k % trgb.len()];
             px[..3].copy_from_slice(&c.map(|v| v * 255.0));
         }
         for px in tgt.prev.iter_mut() {
-            px[..3].copy_from_slice(&[rng.f32() * 255.0, rng.f32() * 255.0, rng.f32() * 255.0]);
+            px[..3].copy_from_slice(&[rng.next_f32() * 255.0, rng.next_f32() * 255.0, rng.next_f32() * 255.0]);
         }
         let mut feat = src.feat.clone();
         for f in feat.iter_mut() {
@@ -494,17 +494,17 @@ pub(crate) mod tests {
                 continue;
             }
             let (i, x, y) = src.coords(list[rng.below(list.len())] as usize);
-            let (cx, cy) = (x as f32 + rng.range_f32(-0.49, 0.49), y as f32 + rng.range_f32(-0.49, 0.49));
-            let th = rng.range_f32(-std::f32::consts::PI, std::f32::consts::PI);
+            let (cx, cy) = (x as f32 + rng.range(-0.49, 0.49), y as f32 + rng.range(-0.49, 0.49));
+            let th = rng.range(-std::f32::consts::PI, std::f32::consts::PI);
             let (c, s) = (th.cos(), th.sin());
             let q = tgt.active[rng.below(tgt.active.len())] as usize;
             let query = Query {
                 tq: tgt.pindex(q % 30, q / 30),
                 w_col: 1.0,
-                mw: if rng.f32() < 0.5 { 0.0 } else { 0.7 },
-                w_om: if rng.f32() < 0.3 { 0.0 } else { 1e-4 },
+                mw: if rng.next_f32() < 0.5 { 0.0 } else { 0.7 },
+                w_om: if rng.next_f32() < 0.3 { 0.0 } else { 1e-4 },
             };
-            let flip = rng.f32() < 0.5;
+            let flip = rng.next_f32() < 0.5;
             assert!(src.info_at(i, cx, cy).unwrap().1.flags & VALID != 0);
             let win = Window::new(src, &tgt, &query);
             let fast = patch_error(src, &feat, &win, at(i, cx, cy, c, s), flip, f32::INFINITY);
@@ -544,11 +544,10 @@ pub(crate) mod tests {
     #[test]
     fn tap_offsets_are_the_nearest_pixels() {
         let stride = 57;
-        let mut rng = Rng::keyed(&[21]);
+        let mut rng = SplitMix64::keyed(&[21]);
         for _ in 0..5000 {
-            let th = rng.range_f32(-3.2, 3.2);
-            let c =
-                Center { i: 0, cx: rng.range_f32(3.0, 40.0), cy: rng.range_f32(3.0, 40.0), c: th.cos(), s: th.sin() };
+            let th = rng.range(-3.2, 3.2);
+            let c = Center { i: 0, cx: rng.range(3.0, 40.0), cy: rng.range(3.0, 40.0), c: th.cos(), s: th.sin() };
             let offs = tap_offsets(stride, c);
             for (k, (a, b)) in crate::synth::nnf::offsets().enumerate() {
                 let (a, b) = (a as f32, b as f32);
@@ -592,8 +591,8 @@ pub(crate) mod tests {
 mod speed {
     use super::tests::synthetic;
     use super::*;
+    use crate::rng::SplitMix64;
     use crate::synth::params::Params;
-    use crate::synth::rng::Rng;
     use crate::synth::source::SourcePyramid;
 
     /// Development measurement (not a test of speed): `cargo test --release kernel_speed -- --ignored --nocapture`.
@@ -609,7 +608,7 @@ mod speed {
         let (_, tg) = synthetic(500, 400, 150.0, 99);
         let tgt = TargetLevel::new(&tg, &pyr.quant, 10.0, None, [1.0, 1.0, 1.0]);
         let feat = src.feat.clone();
-        let mut rng = Rng::keyed(&[5]);
+        let mut rng = SplitMix64::keyed(&[5]);
         let n: usize = std::env::var("FM_N").ok().and_then(|v| v.parse().ok()).unwrap_or(2_000_000);
         let windows = |mw: f32| -> Vec<Window> {
             (0..256)
@@ -623,7 +622,7 @@ mod speed {
             .map(|_| {
                 let list = &src.valid[1];
                 let (i, x, y) = src.coords(list[rng.below(list.len())] as usize);
-                let th = rng.range_f32(-3.0, 3.0);
+                let th = rng.range(-3.0, 3.0);
                 (i, x as f32 + 0.3, y as f32 - 0.2, th.cos(), th.sin(), rng.below(256))
             })
             .collect();

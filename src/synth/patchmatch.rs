@@ -11,9 +11,9 @@
 use super::nnf::{Match, Nnf, aligning_rotation};
 use super::params::{HALF, PATCH, Params};
 use super::patch::{Center, Query, Window, patch_error, patch_error_pair};
-use super::rng::Rng;
 use super::source::{Feat, SourceLevel, VALID, bit_set, floor4_i32};
 use super::target::TargetLevel;
+use crate::rng::SplitMix64;
 use glam::Vec2;
 use rayon::prelude::*;
 
@@ -185,7 +185,7 @@ impl<'a> Ctx<'a> {
     }
 
     /// A uniformly random valid match for target pixel q.
-    pub fn random_match(&self, q: usize, rng: &mut Rng) -> Match {
+    pub fn random_match(&self, q: usize, rng: &mut SplitMix64) -> Match {
         let seg = self.wanted_segment(q).unwrap_or(if self.src.valid[0].is_empty() { 1 } else { 0 });
         let list = &self.src.valid[seg];
         if list.is_empty() {
@@ -289,7 +289,7 @@ impl<'a> Ctx<'a> {
         e1: (f32, f32),
         n2: Option<Match>,
         e2: (f32, f32),
-        rng: &mut Rng,
+        rng: &mut SplitMix64,
         stats: &mut Stats,
     ) -> (Match, f32) {
         let win = self.window(q);
@@ -322,7 +322,7 @@ impl<'a> Ctx<'a> {
         // (padded index, frame, x, y) of each draw, and whether it is a valid center.
         let mut drawn = [(0u32, 0u16, 0u16, 0u16, false); MAX_RANDOM];
         for (d, &(sx, sy, si)) in drawn.iter_mut().zip(&self.radii[..self.draws]) {
-            let (ox, oy, oi) = (rng.range_f32(-sx, sx), rng.range_f32(-sy, sy), rng.range_f32(-si, si));
+            let (ox, oy, oi) = (rng.range(-sx, sx), rng.range(-sy, sy), rng.range(-si, si));
             let [x, y, i, _] = floor4_i32([v0.x + ox + 0.5, v0.y + oy + 0.5, v0.i as f32 + oi + 0.5, 0.0]);
             let i = i.clamp(0, last);
             // Negative coordinates wrap to large unsigned ones.
@@ -407,7 +407,7 @@ pub(crate) fn sweep(ctx: &Ctx, nnf: &mut Nnf, iter: usize) -> (Stats, f64) {
                     let n1 = get(chunk, xi - step, yi);
                     let n2 = get(chunk, xi, yi - step);
                     let mut rng =
-                        Rng::keyed(&[ctx.keys[0], ctx.keys[1], ctx.keys[2], ctx.keys[3], iter as u64, q as u64]);
+                        SplitMix64::keyed(&[ctx.keys[0], ctx.keys[1], ctx.keys[2], ctx.keys[3], iter as u64, q as u64]);
                     let cur = chunk[(y - y0) * w + x];
                     let e = step as f32;
                     let (new, refreshed) = ctx.improve(q, cur, n1, (e, 0.0), n2, (0.0, e), &mut rng, &mut stats);

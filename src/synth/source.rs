@@ -701,11 +701,11 @@ mod tests {
             assert_eq!(src.sample_rgb(2, x as f32, y as f32), want);
             assert_eq!(src.sample_rgb_cubic(2, x as f32, y as f32), want);
         }
-        let mut rng = crate::synth::rng::Rng::keyed(&[11]);
+        let mut rng = crate::rng::SplitMix64::keyed(&[11]);
         let mut between = 0;
         for _ in 0..20_000 {
             let i = rng.below(3);
-            let (x, y) = (rng.range_f32(-8.0, 48.0), rng.range_f32(-8.0, 38.0));
+            let (x, y) = (rng.range(-8.0, 48.0), rng.range(-8.0, 38.0));
             let (a, b) = (src.sample_rgb(i, x, y), src.sample_rgb_cubic(i, x, y));
             assert!(a.iter().chain(&b).all(|v| (0.0..=1.0).contains(v)), "{a:?} {b:?} at {x},{y}");
             between += (a != src.sample_rgb(i, x.round(), y.round())) as usize;

@@ -28,8 +28,8 @@ pub(crate) fn disc_guides(w: usize, h: usize, c: Vec2, r: f32, v: f32, k: usize,
 /// A textured exemplar: a growing disc of noisy "paint" on white paper.
 pub(crate) fn disc_exemplar(w: usize, h: usize, frames: usize, seed: u64) -> (Vec<Plane<Rgb>>, Vec<FrameGuides>) {
     let c = Vec2::new(w as f32 / 2.0, h as f32 / 2.0);
-    let mut rng = Rng::keyed(&[seed]);
-    let noise = img::gaussian_blur(&Plane::from_fn(w, h, |_, _| rng.f32()), 1.2);
+    let mut rng = SplitMix64::keyed(&[seed]);
+    let noise = img::gaussian_blur(&Plane::from_fn(w, h, |_, _| rng.next_f32()), 1.2);
     let mut rgb = Vec::new();
     let mut g = Vec::new();
     for k in 0..frames {

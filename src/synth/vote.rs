@@ -183,9 +183,9 @@ pub(crate) fn vote_grain(src: &SourceLevel, nnf: &Nnf, fill: Rgb, sigma: f32) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::rng::SplitMix64;
     use crate::synth::nnf::Match;
     use crate::synth::params::Params;
-    use crate::synth::rng::Rng;
     use crate::synth::source::SourcePyramid;
     use crate::synth::tests::disc_exemplar;
 
@@ -233,7 +233,7 @@ mod tests {
         let worst = plain.iter().zip(&kept).map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).abs()).fold(0.0, f32::max));
         assert!(worst.fold(0.0, f32::max) < 1e-5);
         // Independent voters: every pixel a random interior pixel.
-        let mut rng = Rng::keyed(&[3]);
+        let mut rng = SplitMix64::keyed(&[3]);
         let pool: Vec<(usize, usize)> =
             (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).filter(|&(x, y)| inside(x, y)).collect();
         let mut random = Nnf::new(w, h);

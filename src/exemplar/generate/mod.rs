@@ -29,11 +29,11 @@ mod km;
 mod paper;
 mod sim;
 
-use super::rng::SplitMix64;
 use super::{Exemplar, ExemplarMeta};
 use crate::error::{Error, Result};
 use crate::img::{Plane, Rgb};
 use crate::progress::Progress;
+use crate::rng::SplitMix64;
 use paper::Paper;
 use serde::{Deserialize, Serialize};
 use sim::{Drop, Sim, SimParams};

@@ -4,7 +4,7 @@
 //! horizontally blurred noise.
 
 use super::blur::blur_xy;
-use crate::exemplar::rng::{SplitMix64, lattice};
+use crate::rng::{SplitMix64, lattice};
 
 /// The paper's height field and what the simulation derives from it.
 pub(crate) struct Paper {

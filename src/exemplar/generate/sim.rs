@@ -10,7 +10,7 @@
 
 use super::Paper;
 use super::blur::blur_xy;
-use crate::exemplar::rng::SplitMix64;
+use crate::rng::SplitMix64;
 
 /// The per-step constants, derived from [`super::GeneratorParams`].
 #[derive(Clone, Debug)]
