@@ -65,12 +65,18 @@ fn psnr(a: &Plane<Rgb>, b: &Plane<Rgb>, mask: &Mask) -> f64 {
     10.0 * (1.0 / (se / n as f64)).log10()
 }
 
+/// A synthesizer with default parameters (seed `seed`) on a 64 × 64 [`disc_exemplar`] of
+/// `frames` frames (noise seed `ex_seed`, border width 6), and that exemplar.
+fn disc_synthesizer(frames: usize, ex_seed: u64, seed: u64) -> (Synthesizer, Vec<Plane<Rgb>>, Vec<FrameGuides>) {
+    let (rgb, g) = disc_exemplar(64, 64, frames, ex_seed);
+    let params = Params::builder().seed(seed).build().unwrap();
+    let source = Source::from_parts(&rgb, &g, &params, 6.0).unwrap();
+    (Synthesizer::new(source, params).unwrap(), rgb, g)
+}
+
 #[test]
 fn identity_reproduces_the_exemplar() {
-    let (rgb, g) = disc_exemplar(64, 64, 6, 1);
-    let params = Params::builder().seed(3).build().unwrap();
-    let source = Source::from_parts(&rgb, &g, &params, 6.0).unwrap();
-    let mut s = Synthesizer::new(source, params).unwrap();
+    let (mut s, rgb, g) = disc_synthesizer(6, 1, 3);
     let mut scores = Vec::new();
     for k in 0..g.len() {
         let out = s.step(&g[k]).unwrap();
@@ -231,10 +237,7 @@ fn continuation(field: &Plane<[f32; 4]>, keep: impl Fn(usize, usize) -> bool) ->
 /// own residual, which cuts the pieces apart.
 #[test]
 fn shift_keeps_coherent_pieces_on_a_translating_shape() {
-    let (rgb, g) = disc_exemplar(64, 64, 8, 5);
-    let params = Params::builder().seed(13).build().unwrap();
-    let source = Source::from_parts(&rgb, &g, &params, 6.0).unwrap();
-    let mut s = Synthesizer::new(source, params).unwrap();
+    let (mut s, _, _) = disc_synthesizer(8, 5, 13);
     s.set_debug(true);
     let target: Vec<FrameGuides> =
         (0..3).map(|k| translating_disc(112, 64, Vec2::new(36.0, 32.0), 22.0, 3.0, k)).collect();
