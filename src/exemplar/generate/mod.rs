@@ -13,7 +13,7 @@
 //! 3. **rendering** (`km`): one Kubelka–Munk layer of suspended + deposited pigment over
 //!    the paper's reflectance, converted to sRGB; the mask is where pigment is visible.
 //!
-//! Everything is single-threaded and driven by one [`SplitMix64`]
+//! Everything is single-threaded and driven by one SplitMix64 generator
 //! stream, so a seed gives byte-identical frames on any machine and thread count.
 //!
 //! ```no_run
