@@ -50,20 +50,21 @@ fn check(what: &str, value: Option<f32>, floor: f32, higher: bool, failures: &mu
 /// Moving targets at the size users run (512², 24 frames), two exemplars with different rims.
 ///
 /// Measured (`quality -e blue-bloom -e ink-rims --target growing --target translating
-/// --frames 24`, κ = 2, advection by warping the field): IoU of the alpha 0.996–0.997,
-/// contrast 0.70–0.79 (of the exemplar's at the same depths), edge darkening 0.62–0.82,
-/// palette 0.007–0.075, incoherent change 0.76–0.84, motion agreement 0.61–0.69. With κ = 1
-/// contrast was 0.63–0.80, which fails the contrast floor on blue-bloom; with the advection
-/// that moved each match in the exemplar by its own rest, incoherent change was 0.92–1.07,
-/// which fails its floor. Before the fidelity work the same targets (48 frames, README)
-/// scored IoU α 0.92–0.94, edge darkening −0.27–0.27 and incoherent change 1.22–2.0.
+/// --frames 24`; κ = 2, advection by warping the field, the extent term only where no paint is
+/// carried): IoU of the alpha 0.996–0.997, contrast 0.67–0.76 (of the exemplar's at the same
+/// depths), edge darkening 0.69–0.95, palette 0.007–0.042, incoherent change 0.57–0.71, motion
+/// agreement 0.61–0.69. With the extent term everywhere (the paper) the same runs scored edge
+/// darkening 0.62–0.82, palette up to 0.075 and incoherent change 0.76–0.84; with the advection
+/// that moved each match in the exemplar by its own rest, incoherent change was 0.92–1.07.
+/// Before the fidelity work the same targets (48 frames, README) scored IoU α 0.92–0.94, edge
+/// darkening −0.27–0.27 and incoherent change 1.22–2.0.
 ///
-/// The floors are reached for coverage, incoherent change (≤ 1.2) and motion
-/// agreement (≥ 0.6); not yet for contrast (0.85: measured 0.70–0.79), edge darkening of
-/// blue-bloom growing (0.8: measured 0.62) and the palette of ink-rims (0.03: 0.066–0.075).
-/// The floors below are the measured values less a margin (~0.05–0.1; the spread between
-/// seeds and targets is ~0.05): contrast 0.66 against 0.70, edge darkening 0.56 against 0.62,
-/// palette 0.09 against 0.075, incoherent change 0.95 against 0.84, motion 0.55 against 0.61.
+/// The floors are reached for coverage, incoherent change (≤ 1.2), motion agreement
+/// (≥ 0.6) and the rim of three of the four runs; not yet for contrast (0.85: measured
+/// 0.67–0.76), blue-bloom growing's rim (0.8: 0.69) and ink-rims' palette (0.03: 0.028–0.042).
+/// The floors below are the measured values less a margin (~0.03–0.1; the spread between seeds
+/// and targets is ~0.05): contrast 0.64 against 0.67, edge darkening 0.62 against 0.69, palette
+/// 0.06 against 0.042, incoherent change 0.8 against 0.71, motion 0.55 against 0.61.
 #[test]
 fn moving_targets_keep_the_rim_texture_and_coherence() {
     let report = suite(SuiteOptions {
@@ -78,10 +79,10 @@ fn moving_targets_keep_the_rim_texture_and_coherence() {
         let s = &r.summary;
         let name = |m: &str| format!("{} {} {m}", r.exemplar, r.target);
         check(&name("IoU α"), r.coverage_alpha, 0.98, true, &mut failures);
-        check(&name("contrast"), s.contrast_ratio, 0.66, true, &mut failures);
-        check(&name("edge darkening"), s.edge_darkening_ratio, 0.56, true, &mut failures);
-        check(&name("palette"), s.palette_distance_mean, 0.09, false, &mut failures);
-        check(&name("incoherent change"), s.incoherent_change_ratio, 0.95, false, &mut failures);
+        check(&name("contrast"), s.contrast_ratio, 0.64, true, &mut failures);
+        check(&name("edge darkening"), s.edge_darkening_ratio, 0.62, true, &mut failures);
+        check(&name("palette"), s.palette_distance_mean, 0.06, false, &mut failures);
+        check(&name("incoherent change"), s.incoherent_change_ratio, 0.8, false, &mut failures);
         check(&name("motion agreement"), s.motion_agreement, 0.55, true, &mut failures);
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
@@ -92,15 +93,16 @@ fn moving_targets_keep_the_rim_texture_and_coherence() {
 /// window, contrast and edge darkening relative to the first window's. At half size (256²,
 /// the exemplar scaled alike) to keep the test under two minutes.
 ///
-/// Measured (`quality -e ink-rims -e blue-bloom --target long --scale 0.5`, κ = 2, advection
-/// by warping the field): ink-rims contrast 0.82–0.97 and rim 0.96–1.06 of the first window;
-/// blue-bloom contrast 0.77–0.99 and rim 0.76–0.90 (its first window has the young bloom's
-/// strong rim, which then settles); over the whole run contrast 0.54 and 0.46, edge darkening
-/// 1.16 and 0.76. The floor (0.9 in every window) is reached by ink-rims' rim only.
-/// The warp keeps the field's pieces whole (the moving targets' incoherent change fell from
-/// 0.92–1.07 to 0.76–0.84) but the paint it carries longer fades a little more: with the
-/// previous advection the minima were ink-rims 0.86/1.00 and blue-bloom 0.79/0.83, and the
-/// floors were 0.8/0.9 and 0.72/0.75. The floors here are the new minima less 0.06–0.07.
+/// Measured (`quality -e ink-rims -e blue-bloom --target long --scale 0.5`; κ = 2, advection
+/// by warping the field, the extent term only where no paint is carried): ink-rims contrast
+/// 0.83–0.96 and rim 0.99–1.10 of the first window; blue-bloom contrast 0.73–0.98 and rim
+/// 0.76–0.88 (its first window has the young bloom's strong rim, which then settles); over the
+/// whole run contrast 0.54 and 0.48, edge darkening 1.19 and 0.75. The floor (0.9 in
+/// every window) is reached by ink-rims' rim only. With the advection that moved each match in
+/// the exemplar by its own rest the minima were ink-rims 0.86/1.00 and blue-bloom 0.79/0.83
+/// (floors 0.8/0.9 and 0.72/0.75): the warp, which keeps the field's pieces whole, carries
+/// paint longer, and carried paint pales a little more. The floors here are the new minima
+/// less 0.06–0.07.
 #[test]
 fn long_target_keeps_its_paint_in_every_window() {
     let report = suite(SuiteOptions {
@@ -110,7 +112,7 @@ fn long_target_keeps_its_paint_in_every_window() {
         scale: 0.5,
         ..SuiteOptions::default()
     });
-    let floors = [("ink-rims", 0.76, 0.9), ("blue-bloom", 0.71, 0.7)];
+    let floors = [("ink-rims", 0.77, 0.92), ("blue-bloom", 0.67, 0.7)];
     let mut failures = Vec::new();
     for (r, (name, contrast, rim)) in report.rows.iter().zip(floors) {
         assert_eq!((r.exemplar.as_str(), r.frames, r.windows.len()), (name, 300, 6));

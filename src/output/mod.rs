@@ -86,7 +86,10 @@ pub fn prepare_dir(dir: &Path) -> Result<()> {
             None => Error::io(dir, e),
         });
     }
-    let probe = dir.join(format!(".fluidymation-write-test.{}", std::process::id()));
+    // Unique per call: a batch prepares several files' folders at once, in one process.
+    static PROBES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = PROBES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let probe = dir.join(format!(".fluidymation-write-test.{}-{n}", std::process::id()));
     std::fs::write(&probe, b"").map_err(|e| Error::io(dir, e))?;
     std::fs::remove_file(&probe).map_err(|e| Error::io(dir, e))?;
     Ok(())

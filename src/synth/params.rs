@@ -231,6 +231,9 @@ impl ParamsBuilder {
     /// ([`ParamsBuilder::ext_normalize`]) they match more closely and need less weight: 0.005
     /// against 0.015 raised edge darkening on the quality suite's moving targets (blue-bloom
     /// translating 0.70 → 0.81, yellow-granules growing 0.54 → 0.61) at equal contrast.
+    /// The term applies only where no paint is carried from the previous frame (the first
+    /// frame, newly covered pixels; see `synth::patch`): carried paint keeps the age it was
+    /// given, and the time shift advances it.
     pub fn w_ext(mut self, w: f32) -> Self {
         self.p.w_ext = w;
         self

@@ -2,12 +2,17 @@
 //!
 //! ```text
 //! D = Σ_{p′,q′} w_col·|S^rgb(p′) − T^rgb(q′)|² + w_df·|S^df − T^df|²
-//!             + w_ext·(|S^ext+ − T^ext±|² + |S^ext− − T^ext∓|²)
+//!             + [m(q) = 0]·w_ext·(|S^ext+ − T^ext±|² + |S^ext− − T^ext∓|²)
 //!             + m(q)·w_prev·|S^rgb(p′) − T^prev(q′)|²  +  λ·Ω*(p′)/(n²·ω*)
 //! ```
 //!
 //! where p′ runs over the window around the sub-pixel source center rotated by θ, and ext±
-//! are swapped when the rotated flows oppose. The occurrence penalty rides in the pixel's
+//! are swapped when the rotated flows oppose. The extent term applies only where no paint is
+//! carried from the previous frame (m(q)·w_prev = 0: the first frame, newly covered pixels):
+//! a deviation from the paper, whose extent term applies everywhere — measured on the quality
+//! suite's 25 moving runs it raised edge darkening from 0.84 to 0.89 on average and lowered
+//! incoherent change from 0.92 to 0.82, with the palette within 0.03 on 20 of 30 runs instead of
+//! 15 (README, `quality`). The occurrence penalty rides in the pixel's
 //! eighth lane as `√(penalty/w_Ω)` against a target lane of 0, so it is one more weighted
 //! squared difference ([`super::occurrence::Occurrence`]). In this search metric each rotated tap
 //! reads the nearest exemplar pixel (at most ½ px away); voting samples the rotated windows at
@@ -78,6 +83,14 @@ impl Window {
         let gamma: [f32; LANES] = std::array::from_fn(|k| if k < 3 { gamma * lw[k] } else { 0.0 });
         let mut w = [sum * lw[0], sum * lw[1], sum * lw[2], lw[3], lw[4], lw[5], 0.0, 0.0];
         w[OMEGA_LANE] = q.w_om;
+        // Where the previous frame's paint is carried (m(q)·w_prev > 0), the extents no longer
+        // choose the paint: its age was chosen where it first appeared, and the time shift
+        // advances it. Comparing the carried match's extents again would pull it off the field
+        // the temporal term holds (the target's extents keep changing with its motion).
+        if mw > 0.0 {
+            w[4] = 0.0;
+            w[5] = 0.0;
+        }
         // The reflected window swaps ext± on the target side, which needs equal weights.
         debug_assert_eq!(w[4], w[5]);
         let top = q.tq - HALF - HALF * tgt.stride;
@@ -426,8 +439,12 @@ pub(crate) fn patch_error_reference(
                 total += (q.w_col * lw[k] * (v[k] - t[k]).powi(2)) as f64;
                 total += (q.mw * lw[k] * (v[k] - p[k]).powi(2)) as f64;
             }
+            // The boundary term always; the extent terms only where nothing is carried.
+            let ext_on = q.mw <= 0.0;
             for k in 3..6 {
-                total += (lw[k] * (v[k] - t[k]).powi(2)) as f64;
+                if k == 3 || ext_on {
+                    total += (lw[k] * (v[k] - t[k]).powi(2)) as f64;
+                }
             }
             // The occurrence penalty w_Ω·q².
             total += (q.w_om * v[OMEGA_LANE] * v[OMEGA_LANE]) as f64;
@@ -691,14 +708,21 @@ mod terms {
         };
         let def = Params::builder().build().unwrap();
         assert!(run(def.clone(), &|_| {}) < 1e-6);
+        // The extent terms count where no paint is carried (w_prev = 0 here: m(q)·w_prev = 0).
+        let fresh = || Params::builder().w_prev(0.0);
         for (name, lane, with, without) in [
             ("df", 3, def.clone(), Params::builder().w_df(0.0).build().unwrap()),
-            ("ext+", 4, def.clone(), Params::builder().w_ext(0.0).build().unwrap()),
-            ("ext-", 5, def.clone(), Params::builder().w_ext(0.0).build().unwrap()),
+            ("ext+", 4, fresh().build().unwrap(), fresh().w_ext(0.0).build().unwrap()),
+            ("ext-", 5, fresh().build().unwrap(), fresh().w_ext(0.0).build().unwrap()),
         ] {
             let a = run(with, &shift_lane(lane, 30.0));
             let b = run(without, &shift_lane(lane, 30.0));
             assert!(a > 0.01 && b < 1e-6, "{name}: with the term {a}, without {b}");
+        }
+        // Where paint is carried (m(q)·w_prev > 0) they do not: its age was chosen before.
+        for lane in [4, 5] {
+            let carried = run(def.clone(), &shift_lane(lane, 30.0));
+            assert!(carried < 1e-6, "ext lane {lane} counted on carried paint: {carried}");
         }
         let a = run(def, &prev_off);
         let b = run(Params::builder().w_prev(0.0).build().unwrap(), &prev_off);
