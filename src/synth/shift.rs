@@ -120,8 +120,8 @@ pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
             *o = *m;
             return;
         };
-        *o = Match { i: best_i as u16, err: f32::INFINITY, ..*m };
         if !inp.advect {
+            *o = Match { i: best_i as u16, err: f32::INFINITY, ..*m };
             return;
         }
         // The rest of the motion: the match of the pixel `rest` behind q (the warp), or q's
@@ -135,19 +135,20 @@ pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
             let p = Vec2::new((q % prev.w) as f32, (q / prev.w) as f32) - back;
             let r = p.round();
             let from = (r.x >= 0.0 && r.y >= 0.0 && (r.x as usize) < prev.w && (r.y as usize) < prev.h)
-                .then(|| prev.data[r.y as usize * prev.w + r.x as usize])
+                .then(|| *prev.get(r.x as usize, r.y as usize))
                 .filter(|m2| m2.ok)
                 .and_then(|m2| time_step(src, &m2, dt, c).map(|(i2, _)| (m2, i2)));
             if let Some((m2, i2)) = from {
                 let (dx, dy) = m2.rotate(p.x - r.x, p.y - r.y);
                 (m, best_i, x, y) = (m2, i2, m2.x + dx, m2.y + dy);
-                *o = Match { i: i2 as u16, err: f32::INFINITY, ..m2 };
             } else {
                 let (dx, dy) = m.rotate(back.x, back.y);
                 (x, y) = (x - dx, y - dy);
             }
         }
-        let shifted = *o;
+        // The time-shifted match before it moves; what stays where the move is refused.
+        let shifted = Match { i: best_i as u16, err: f32::INFINITY, ..m };
+        *o = shifted;
         // Near the edge, the match is re-anchored to the target's distance from the edge: the
         // rim of paint travels with the edge. (Flow magnitudes only approximate how far an
         // edge moves, and the small errors of every frame would add up to a lagging, pale rim.)
