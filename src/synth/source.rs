@@ -552,40 +552,35 @@ fn build_level(rgb: &[Plane<Rgb>], guides: &[FrameGuides], qn: &Quant, lane_w: [
     let mut seg_count = vec![[0usize; 2]; frames];
     for (i, (c, g)) in rgb.iter().zip(guides).enumerate() {
         let roi = dilate(&g.mask, HALF);
-        for py in 0..h + 2 * PAD {
-            for px in 0..stride {
-                let x = (px as isize - PAD as isize).clamp(0, w as isize - 1) as usize;
-                let y = (py as isize - PAD as isize).clamp(0, h as isize - 1) as usize;
-                let col = c.get(x, y);
-                let dist = g.dist.get(x, y);
-                let df = (dist / b).min(1.0);
-                let ep = g.ext_pos.get(x, y);
-                let en = g.ext_neg.get(x, y);
-                let idx = i * frame_len + py * stride + px;
-                let v = [col[0], col[1], col[2], df, ep, en, 0.0, 0.0];
-                feat[idx] = std::array::from_fn(|k| if k < 6 { qn.quantize(k, v[k]) } else { 0 });
-                let inside = px >= PAD && py >= PAD && px < PAD + w && py < PAD + h;
-                if !inside {
-                    continue;
-                }
-                let interior = dist >= b;
-                let in_mask = g.mask.get(x, y);
-                let away = x >= MARGIN && y >= MARGIN && x + MARGIN < w && y + MARGIN < h;
-                let mut flags = 0;
-                if interior {
-                    flags |= INTERIOR;
-                }
-                if in_mask {
-                    flags |= IN_MASK;
-                    seg_count[i][interior as usize] += 1;
-                }
-                if roi.get(x, y) && away {
-                    flags |= VALID;
-                    valid[interior as usize].push(idx as u32);
-                }
-                feat[idx][FLAG_LANE] = flags;
-                info[idx] = PixInfo { dir: flow_dir(g.flow.get(x, y)), dist, ext_pos: ep, ext_neg: en, flags };
+        for (offset, x, y, inside) in padded_pixels(w, h) {
+            let col = c.get(x, y);
+            let dist = g.dist.get(x, y);
+            let df = (dist / b).min(1.0);
+            let ep = g.ext_pos.get(x, y);
+            let en = g.ext_neg.get(x, y);
+            let idx = i * frame_len + offset;
+            let v = [col[0], col[1], col[2], df, ep, en, 0.0, 0.0];
+            feat[idx] = std::array::from_fn(|k| if k < 6 { qn.quantize(k, v[k]) } else { 0 });
+            if !inside {
+                continue;
             }
+            let interior = dist >= b;
+            let in_mask = g.mask.get(x, y);
+            let away = x >= MARGIN && y >= MARGIN && x + MARGIN < w && y + MARGIN < h;
+            let mut flags = 0;
+            if interior {
+                flags |= INTERIOR;
+            }
+            if in_mask {
+                flags |= IN_MASK;
+                seg_count[i][interior as usize] += 1;
+            }
+            if roi.get(x, y) && away {
+                flags |= VALID;
+                valid[interior as usize].push(idx as u32);
+            }
+            feat[idx][FLAG_LANE] = flags;
+            info[idx] = PixInfo { dir: flow_dir(g.flow.get(x, y)), dist, ext_pos: ep, ext_neg: en, flags };
         }
     }
     let dirs = info.iter().map(|p| p.dir).collect();
@@ -613,6 +608,21 @@ fn build_level(rgb: &[Plane<Rgb>], guides: &[FrameGuides], qn: &Quant, lane_w: [
         lane_w,
         grain: Vec::new(),
     }
+}
+
+/// Every pixel of a frame's padded layout (`w + 2·PAD` × `h + 2·PAD`, row-major): its offset
+/// within the frame, the frame pixel it holds (the nearest one: the padding repeats the edge),
+/// and whether it lies in the frame itself.
+fn padded_pixels(w: usize, h: usize) -> impl Iterator<Item = (usize, usize, usize, bool)> {
+    let stride = w + 2 * PAD;
+    (0..h + 2 * PAD).flat_map(move |py| {
+        (0..stride).map(move |px| {
+            let x = (px as isize - PAD as isize).clamp(0, w as isize - 1) as usize;
+            let y = (py as isize - PAD as isize).clamp(0, h as isize - 1) as usize;
+            let inside = px >= PAD && py >= PAD && px < PAD + w && py < PAD + h;
+            (py * stride + px, x, y, inside)
+        })
+    })
 }
 
 /// σ of the low-pass that separates a frame's structure from its grain, pixels.
@@ -647,16 +657,12 @@ fn build_grain(level: &mut SourceLevel, rgb: &[Plane<Rgb>], guides: &[FrameGuide
             let d = (v[0] - l[0]).powi(2) + (v[1] - l[1]).powi(2) + (v[2] - l[2]).powi(2);
             [d, 0.0, 0.0, 1.0]
         });
-        for py in 0..h + 2 * PAD {
-            for px in 0..level.stride {
-                let x = (px as isize - PAD as isize).clamp(0, w as isize - 1) as usize;
-                let y = (py as isize - PAD as isize).clamp(0, h as isize - 1) as usize;
-                let l = low.get(x, y);
-                let sd = norm(&var, x, y)[0].max(0.0).sqrt();
-                let q = |v: f32, unit: f32| (v * unit).round().clamp(0.0, 255.0) as u8;
-                grain[i * level.frame_len + py * level.stride + px] =
-                    [q(l[0], 255.0), q(l[1], 255.0), q(l[2], 255.0), q(sd, GRAIN_STD_UNIT)];
-            }
+        for (offset, x, y, _) in padded_pixels(w, h) {
+            let l = low.get(x, y);
+            let sd = norm(&var, x, y)[0].max(0.0).sqrt();
+            let q = |v: f32, unit: f32| (v * unit).round().clamp(0.0, 255.0) as u8;
+            grain[i * level.frame_len + offset] =
+                [q(l[0], 255.0), q(l[1], 255.0), q(l[2], 255.0), q(sd, GRAIN_STD_UNIT)];
         }
     }
     level.grain = grain;
