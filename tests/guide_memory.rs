@@ -1,9 +1,10 @@
-//! Peak memory and CPU time of the streaming target path on a long, large sequence (issue 3:
-//! 400 frames of 1000×800 must stay far below holding every guide of every frame).
+//! Peak memory of the streaming target path on a long, large sequence (issue 3: 400 frames of
+//! 1000×800 must stay far below holding every guide of every frame), asserted; and, ignored by
+//! default, CPU-time prints of the guide stages (timings belong in benchmarks: run them with
+//! `cargo test --release --test guide_memory -- --ignored --nocapture`).
 //!
-//! Ignored by default (it takes minutes); run with
-//! `cargo test --release --test guide_memory -- --ignored --nocapture`, ideally under
-//! `/usr/bin/time -v`. It prints the process's peak resident set (`VmHWM`) and CPU time.
+//! The memory test is the only test of this file that runs by default, so the process's peak
+//! resident set (`VmHWM`) is its own.
 
 use fluidymation::guide::{GuideParams, GuideStream, compute_sequence};
 use fluidymation::img::Plane;
@@ -40,7 +41,9 @@ fn cpu_seconds() -> f64 {
     (ticks(11) + ticks(12)) / 100.0
 }
 
-fn run_stream(n: usize) {
+/// Streams `n` frames of the blob and returns the peak resident set after it (kB) and the
+/// bytes the stream keeps (compact masks and backward-pass checkpoints).
+fn run_stream(n: usize) -> (u64, usize) {
     let params = GuideParams::default();
     let (t0, c0) = (Instant::now(), cpu_seconds());
     let stream = GuideStream::new(n, |i| Ok(blob(i)), &params).unwrap();
@@ -55,28 +58,54 @@ fn run_stream(n: usize) {
     let (t2, c2) = (Instant::now(), cpu_seconds());
     eprintln!(
         "stream {n} frames of {W}x{H}: backward pass {:.1} s wall / {:.1} s CPU, forward {:.1} s wall / {:.1} s CPU; \
-         {:.0} ms wall, {:.0} ms CPU per frame; masks + checkpoints {:.1} MB; checksum {checksum:.3e}",
+         masks + checkpoints {:.1} MB; checksum {checksum:.3e}; {}",
         (t1 - t0).as_secs_f64(),
         c1 - c0,
         (t2 - t1).as_secs_f64(),
         c2 - c1,
-        1000.0 * (t2 - t0).as_secs_f64() / n as f64,
-        1000.0 * (c2 - c0) / n as f64,
-        stored as f64 / 1e6
+        stored as f64 / 1e6,
+        status("VmHWM")
     );
-    eprintln!("{}", status("VmHWM"));
+    (peak_kb(), stored)
 }
 
-#[test]
-#[ignore]
-fn stream_400_frames_peak_memory() {
-    run_stream(400);
+/// The process's peak resident set so far, kB (0 where `/proc` is unavailable).
+fn peak_kb() -> u64 {
+    status("VmHWM").split_whitespace().nth(1).and_then(|v| v.parse().ok()).unwrap_or(0)
 }
 
+/// The forward pass's working set for `n` frames: one segment of `K = ⌈√n⌉` frames' flows and
+/// `ext−` at the mask pixels (8 + 4 bytes each), with the largest mask of the sequence.
+fn segment_bytes(n: usize) -> usize {
+    let k = (n as f64).sqrt().ceil() as usize;
+    let px = (0..n).step_by(20).map(|i| blob(i).data().iter().filter(|&&v| v > 0.5).count()).max().unwrap_or(0);
+    k * px * 12
+}
+
+/// Memory grows with the sequence's length only by what the stream is designed to keep — the
+/// compact masks and `acc−` checkpoints of every frame (`stored_bytes`) and one segment of
+/// `⌈√n⌉` frames — and 400 frames of 1000×800 stay under 160 MB.
+///
+/// Measured (release, 2 threads): peak 92 MB after 50 frames, 132–142 MB after 400 (alone, the
+/// 400-frame stream peaked at 137 MB: README); the stream keeps 8.6 and 28.4 MB. Holding every
+/// guide of every frame would take 400 × 800 000 px × 28 B ≈ 9 GB. Bounds: the growth from 50
+/// to 400 frames (measured 40 MB) at most the growth of what the stream keeps (19 MB) and of
+/// its segment (12 more frames, ≈ 23 MB) plus 16 MB; the peak under 160 MB (measured 132–142).
 #[test]
-#[ignore]
-fn stream_100_frames() {
-    run_stream(100);
+fn streaming_memory_is_bounded_and_grows_only_by_design() {
+    let (short_peak, short_kept) = run_stream(50);
+    let (long_peak, long_kept) = run_stream(400);
+    if short_peak == 0 {
+        eprintln!("SKIPPED: /proc/self/status has no VmHWM on this system");
+        return;
+    }
+    let by_design_kb =
+        ((long_kept.saturating_sub(short_kept) + segment_bytes(400).saturating_sub(segment_bytes(50))) / 1024) as u64;
+    assert!(
+        long_peak <= short_peak + by_design_kb + 16 * 1024,
+        "peak {short_peak} kB after 50 frames, {long_peak} kB after 400; by design it may grow by {by_design_kb} kB"
+    );
+    assert!(long_peak < 160 * 1024, "peak {long_peak} kB for 400 frames of {W}x{H}, bound 160 MB");
 }
 
 #[test]

@@ -65,9 +65,13 @@ pub struct SynthFlags {
     /// Temporal modulation bounds "m_u,m_l" in pixels, as in the thesis [default: 10,2].
     #[arg(long, value_name = "MU,ML")]
     pub prev_modulation_bounds: Option<String>,
-    /// σ of the center weighting in voting, pixels; 0 = uniform [default: 0.7].
+    /// σ of the center weighting in voting the output, pixels; 0 = uniform [default: 0.7].
     #[arg(long, value_name = "PX")]
     pub vote_sigma: Option<f32>,
+    /// σ of the center weighting of the estimates the search matches against (EM estimate,
+    /// temporal guide), pixels; ≤ 0.35 = each pixel's own match, 0 = uniform [default: 0.5].
+    #[arg(long, value_name = "PX")]
+    pub estimate_sigma: Option<f32>,
     /// Also optimize the finest pyramid level (slower; the thesis only votes it).
     #[arg(long)]
     pub optimize_finest: bool,
@@ -117,6 +121,9 @@ impl SynthFlags {
         }
         if let Some(v) = self.vote_sigma {
             b = b.vote_sigma(v);
+        }
+        if let Some(v) = self.estimate_sigma {
+            b = b.estimate_sigma(v);
         }
         if let Some(v) = self.lambda {
             b = b.lambda(v);
@@ -198,6 +205,7 @@ impl SynthFlags {
         push("target-scale", self.target_scale.map(|v| v.to_string()));
         push("prev-modulation-bounds", self.prev_modulation_bounds.clone());
         push("vote-sigma", self.vote_sigma.map(|v| v.to_string()));
+        push("estimate-sigma", self.estimate_sigma.map(|v| v.to_string()));
         if self.optimize_finest {
             out.push("--optimize-finest".into());
         }
@@ -297,6 +305,7 @@ mod tests {
             patchmatch_iterations: Some("6,4".into()),
             prev_modulation_bounds: Some("10,2".into()),
             vote_sigma: Some(0.0),
+            estimate_sigma: Some(0.5),
             optimize_finest: true,
             keep_grain: true,
             ..Default::default()

@@ -425,10 +425,12 @@ impl Synthesizer {
         st.target += t_pyr.elapsed();
         let src = self.source.pyramid.clone();
         // The first frame starts from a random field: its search runs without the coherence
-        // factor κ, which would keep random matches against better ones (Params::coherence).
+        // factor κ, which would keep random matches against better ones (Params::coherence),
+        // and against the averaged estimate of the output's vote: the estimate of each pixel's
+        // own match (Params::estimate_sigma) would hold the random field's mosaic in place.
         let plain;
-        let p = if self.frame == 0 && self.params.coherence != 1.0 {
-            plain = Params { coherence: 1.0, ..self.params.clone() };
+        let p = if self.frame == 0 {
+            plain = Params { coherence: 1.0, estimate_sigma: self.params.vote_sigma, ..self.params.clone() };
             &plain
         } else {
             &self.params
@@ -480,7 +482,7 @@ impl Synthesizer {
             let prev_down = if has_prev {
                 let shifted = timed(&mut st.shift, || shifted0.as_ref().map(|s| s.downscale(l, lw, lh)));
                 if let (Some(sd), Some(prev)) = (&shifted, &prev_here) {
-                    let voted = timed(&mut st.vote, || vote::vote(sl, sd, paper, p.vote_sigma));
+                    let voted = timed(&mut st.vote, || vote::vote(sl, sd, paper, p.estimate_sigma));
                     write_lanes(&mut tgt, &voted, false);
                     timed(&mut st.shift, || {
                         shift::fill_modulation(&mut tgt, sl, sd, &prev.masks[l], b, p.prev_bounds, p.w_prev)
@@ -517,7 +519,7 @@ impl Synthesizer {
                         sanitize(&init, &mut pd);
                         // MERGENNF: per pixel, the field with the smaller error (against the
                         // estimate voted from the up-scaled field).
-                        let voted = timed(&mut st.vote, || vote::vote(sl, &up, paper, p.vote_sigma));
+                        let voted = timed(&mut st.vote, || vote::vote(sl, &up, paper, p.estimate_sigma));
                         write_lanes(&mut tgt, &voted, true);
                         let omega = if finest_vote_only {
                             None
@@ -525,14 +527,15 @@ impl Synthesizer {
                             timed(&mut st.occurrence, || occ.update(sl, &up, &tgt, p.occ_radius, p.lambda))
                         };
                         let ctx = Ctx::new(sl, &tgt, omega, p.w_color, p, keys(0));
-                        timed(&mut st.init, || merge(&ctx, &mut up, &pd));
+                        let kappa = if finest_vote_only { p.coherence } else { 1.0 };
+                        timed(&mut st.init, || merge(&ctx, &mut up, &pd, kappa));
                         evaluations += 2 * tgt.active.len() as u64;
                     }
                     up
                 }
             };
             if !finest_vote_only {
-                let voted = timed(&mut st.vote, || vote::vote(sl, &field, paper, p.vote_sigma));
+                let voted = timed(&mut st.vote, || vote::vote(sl, &field, paper, p.estimate_sigma));
                 write_lanes(&mut tgt, &voted, true);
                 for opt in 0..p.opt_iters_at(from_coarsest) {
                     for it in 0..p.pm_iters_at(from_coarsest) {
@@ -543,7 +546,7 @@ impl Synthesizer {
                         evaluations += stats.evaluations;
                     }
                     energy.push((l, mean_err(&field)));
-                    let voted = timed(&mut st.vote, || vote::vote(sl, &field, paper, p.vote_sigma));
+                    let voted = timed(&mut st.vote, || vote::vote(sl, &field, paper, p.estimate_sigma));
                     write_lanes(&mut tgt, &voted, true);
                 }
             }
@@ -783,8 +786,18 @@ fn repair(ctx: &Ctx, nnf: &mut Nnf) {
     });
 }
 
-/// MERGENNF: keeps, per pixel, whichever of `up` and `prev` has the smaller patch error.
-fn merge(ctx: &Ctx, up: &mut Nnf, prev: &Nnf) {
+/// MERGENNF: keeps, per pixel, whichever of `up` and `prev` has the smaller patch error —
+/// the up-scaled match `up` only when its error is below 1/κ of the carried match's
+/// (`kappa` = κ, 1 = the paper's comparison at face value).
+///
+/// The finest level merges with the coherence factor κ of the random search
+/// ([`ParamsBuilder::coherence`]): it is only voted, so the merge is the one choice made
+/// there, and the up-scaled challenger gets the same handicap as a random candidate. The
+/// coarse levels' estimate is a blur, which a flat, pale exemplar patch fits better than
+/// carried texture; compared at face value, a fifth of the carried matches were replaced
+/// every frame, each by a paler one (measured on green-wash, long target: mean exemplar
+/// luminance of the replacement +0.01), and over 150 frames the paint paled and lost its rim.
+fn merge(ctx: &Ctx, up: &mut Nnf, prev: &Nnf, kappa: f32) {
     let w = up.w;
     up.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
         for (x, m) in row.iter_mut().enumerate() {
@@ -796,7 +809,7 @@ fn merge(ctx: &Ctx, up: &mut Nnf, prev: &Nnf) {
             let win = ctx.window(q);
             let eu = ctx.error_in(&win, m);
             let ep = ctx.error_in(&win, pm);
-            if ep < eu {
+            if ep < kappa * eu {
                 *m = Match { err: ep, ..*pm };
             } else {
                 m.err = eu;
