@@ -21,10 +21,11 @@ fn suite(options: SuiteOptions) -> SuiteReport {
 /// The identity at full size, every bundled exemplar: the floors (PSNR ≥ 28 dB in every
 /// frame, edge darkening ≥ 0.9 of the exemplar's, coverage IoU ≥ 0.97).
 /// Measured: see the README's quality table (identity rows); the worst frame over all five is
-/// green-wash's 28.6 dB in its last frame (the others 36.3–54.2), edge darkening 1.00 and IoU
+/// green-wash's 28.4 dB in its last frame (the others 36.2–54.2), edge darkening 1.00 and IoU
 /// of the alpha 1.00 everywhere. The margin over the 28 dB is thin for green-wash:
 /// with the search's estimate voted with σ = 0.5 instead of 0.7 (Params::estimate_sigma) the
-/// identity is no longer exact everywhere (it was 32.7 dB), and σ = 0.35 falls below (26.6).
+/// identity is no longer exact everywhere (it was 32.7 dB; 28.6 without the grain), and
+/// σ = 0.35 falls below (26.6).
 #[test]
 fn identity_gives_back_the_exemplar_at_full_size() {
     let report = suite(SuiteOptions { targets: vec![], identity: true, ..SuiteOptions::default() });
@@ -53,24 +54,25 @@ fn check(what: &str, value: Option<f32>, floor: f32, higher: bool, failures: &mu
 ///
 /// Measured (`quality -e blue-bloom -e ink-rims --target growing --target translating
 /// --frames 24`; κ = 2 in the search and the finest merge, the search's estimates voted with
-/// σ = 0.5, advection by warping the field, the extent term only where no paint is carried):
-/// IoU of the alpha 0.996–0.997, contrast 0.69–0.85 (of the exemplar's at the same depths),
-/// edge darkening 0.68–0.93, palette 0.007–0.051, incoherent change 0.55–0.62, motion
-/// agreement 0.61–0.68. Before the sharper estimate and κ in the merge: contrast 0.67–0.76,
-/// edge darkening 0.69–0.95, palette 0.007–0.042, incoherent change 0.57–0.71. With the extent
-/// term everywhere (the paper) edge darkening was 0.62–0.82, palette up to 0.075 and
-/// incoherent change 0.76–0.84; with the advection that moved each match in the exemplar by
-/// its own rest, incoherent change was 0.92–1.07. Before the fidelity work the same targets
-/// (48 frames, README) scored IoU α 0.92–0.94, edge darkening −0.27–0.27 and incoherent change
-/// 1.22–2.0.
+/// σ = 0.5, the grain kept, advection by warping the field, the extent term only where no
+/// paint is carried): IoU of the alpha 0.996–0.997, contrast 0.77–0.91 (of the exemplar's at
+/// the same depths), edge darkening 0.67–0.94, palette 0.007–0.050, incoherent change
+/// 0.63–0.76, motion agreement 0.61–0.68. Without the grain (`--no-grain`): contrast 0.69–0.85,
+/// incoherent change 0.55–0.62, the rest within 0.01. Before the sharper estimate and κ in the
+/// merge (no grain): contrast 0.67–0.76, edge darkening 0.69–0.95, palette 0.007–0.042,
+/// incoherent change 0.57–0.71. With the extent term everywhere (the paper) edge darkening was
+/// 0.62–0.82, palette up to 0.075 and incoherent change 0.76–0.84; with the advection that
+/// moved each match in the exemplar by its own rest, incoherent change was 0.92–1.07. Before
+/// the fidelity work the same targets (48 frames, README) scored IoU α 0.92–0.94, edge
+/// darkening −0.27–0.27 and incoherent change 1.22–2.0.
 ///
 /// The floors are reached for coverage, incoherent change (≤ 1.2), motion agreement
-/// (≥ 0.6), the rim of three of the four runs and the contrast of one (ink-rims growing,
-/// 0.85); not yet for the others' contrast (0.69–0.83), blue-bloom growing's rim (0.8: 0.68)
-/// and ink-rims' palette (0.03: 0.039–0.051). The floors below are the measured values less a
-/// margin (~0.03–0.1; the spread between seeds and targets is ~0.05): contrast 0.66 against
-/// 0.69, edge darkening 0.62 against 0.68, palette 0.06 against 0.051, incoherent change 0.7
-/// against 0.62, motion 0.55 against 0.61.
+/// (≥ 0.6), the rim of three of the four runs and the contrast of ink-rims (0.89–0.91); not
+/// yet for blue-bloom's contrast (0.77–0.78), blue-bloom growing's rim (0.8: 0.67) and
+/// ink-rims' palette (0.03: 0.039–0.050). The floors below are the measured values less a
+/// margin (~0.03–0.1; the spread between seeds and targets is ~0.05): contrast 0.72 against
+/// 0.77, edge darkening 0.62 against 0.67, palette 0.06 against 0.050, incoherent change 0.85
+/// against 0.76, motion 0.55 against 0.61.
 #[test]
 fn moving_targets_keep_the_rim_texture_and_coherence() {
     let report = suite(SuiteOptions {
@@ -85,10 +87,10 @@ fn moving_targets_keep_the_rim_texture_and_coherence() {
         let s = &r.summary;
         let name = |m: &str| format!("{} {} {m}", r.exemplar, r.target);
         check(&name("IoU α"), r.coverage_alpha, 0.98, true, &mut failures);
-        check(&name("contrast"), s.contrast_ratio, 0.66, true, &mut failures);
+        check(&name("contrast"), s.contrast_ratio, 0.72, true, &mut failures);
         check(&name("edge darkening"), s.edge_darkening_ratio, 0.62, true, &mut failures);
         check(&name("palette"), s.palette_distance_mean, 0.06, false, &mut failures);
-        check(&name("incoherent change"), s.incoherent_change_ratio, 0.7, false, &mut failures);
+        check(&name("incoherent change"), s.incoherent_change_ratio, 0.85, false, &mut failures);
         check(&name("motion agreement"), s.motion_agreement, 0.55, true, &mut failures);
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
@@ -100,16 +102,17 @@ fn moving_targets_keep_the_rim_texture_and_coherence() {
 /// the exemplar scaled alike) to keep the test under two minutes.
 ///
 /// Measured (`quality -e ink-rims -e blue-bloom --target long --scale 0.5`; κ = 2 in the
-/// search and the finest merge, the search's estimates voted with σ = 0.5, advection by
-/// warping the field, the extent term only where no paint is carried): ink-rims contrast
-/// 0.81–1.00 and rim 1.00–1.09 of the first window; blue-bloom contrast 0.75–1.03 and rim
-/// 0.70–0.91 (its first window has the young bloom's strong rim, which then settles); over the
-/// whole run contrast 0.56 and 0.50, edge darkening 1.25 and 0.77. The floor (0.9 in
-/// every window) is reached by ink-rims' rim only. Before the sharper estimate and κ in the
-/// merge the minima were ink-rims 0.83/0.99 and blue-bloom 0.73/0.76 (floors 0.77/0.92 and
-/// 0.67/0.7): blue-bloom's rim is the one measure these changes lowered (0.76 → 0.70) while
-/// they raised green-wash's from 0.05 to 0.28 and its contrast from 0.43 to 0.60 (README,
-/// `quality`). The floors here are the new minima less 0.05–0.07.
+/// search and the finest merge, the search's estimates voted with σ = 0.5, the grain kept,
+/// advection by warping the field, the extent term only where no paint is carried): lowest
+/// window ÷ first, contrast and rim: ink-rims 0.83 and 0.99, blue-bloom 0.76 and 0.70 (its
+/// first window has the young bloom's strong rim, which then settles); over the whole run
+/// contrast 0.62 and 0.55, edge darkening 1.30 and 0.75. Without the grain the minima were
+/// the same within 0.02. The floor (0.9 in every window) is reached by ink-rims' rim
+/// only. Before the sharper estimate and κ in the merge the minima were ink-rims 0.83/0.99 and
+/// blue-bloom 0.73/0.76 (floors 0.77/0.92 and 0.67/0.7): blue-bloom's rim is the one measure
+/// these changes lowered (0.76 → 0.70) while they raised green-wash's from 0.05 to 0.28 and
+/// its contrast from 0.43 to 0.61 (README, `quality`). The floors here are the minima less
+/// 0.06–0.08.
 #[test]
 fn long_target_keeps_its_paint_in_every_window() {
     let report = suite(SuiteOptions {
@@ -119,7 +122,7 @@ fn long_target_keeps_its_paint_in_every_window() {
         scale: 0.5,
         ..SuiteOptions::default()
     });
-    let floors = [("ink-rims", 0.75, 0.93), ("blue-bloom", 0.69, 0.64)];
+    let floors = [("ink-rims", 0.76, 0.93), ("blue-bloom", 0.69, 0.64)];
     let mut failures = Vec::new();
     for (r, (name, contrast, rim)) in report.rows.iter().zip(floors) {
         assert_eq!((r.exemplar.as_str(), r.frames, r.windows.len()), (name, 300, 6));

@@ -75,10 +75,14 @@ pub struct SynthFlags {
     /// Also optimize the finest pyramid level (slower; the thesis only votes it).
     #[arg(long)]
     pub optimize_finest: bool,
-    /// Give the output back the exemplar's fine grain that voting averages away (sharper
-    /// stills; on moving shapes the grain flickers, so off by default).
-    #[arg(long)]
+    /// Give the output back the exemplar's fine grain that voting averages away (the default;
+    /// the flag is kept so that scripts which give it keep working).
+    #[arg(long, conflicts_with = "no_grain")]
     pub keep_grain: bool,
+    /// Vote the output as the plain average of the patches, as in the paper: calmer paint on
+    /// moving shapes (less grain that changes from frame to frame), less texture.
+    #[arg(long)]
+    pub no_grain: bool,
     /// Keep σ and b as given for thin layers too (by default they are lowered to fit layers
     /// only a few pixels thick; giving --blur-sigma or --border-width also turns this off).
     #[arg(long)]
@@ -108,7 +112,7 @@ impl SynthFlags {
         let mut b: ParamsBuilder = Params::builder()
             .seed(self.seed)
             .optimize_finest(self.optimize_finest)
-            .keep_grain(self.keep_grain)
+            .keep_grain(!self.no_grain)
             .fit_thin_layers(fit);
         if let Some(v) = self.dist_weight {
             b = b.w_df(v);
@@ -211,6 +215,9 @@ impl SynthFlags {
         }
         if self.keep_grain {
             out.push("--keep-grain".into());
+        }
+        if self.no_grain {
+            out.push("--no-grain".into());
         }
         if self.no_thin_fit {
             out.push("--no-thin-fit".into());
