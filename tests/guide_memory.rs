@@ -9,50 +9,10 @@
 
 use fluidymation::guide::{GuideParams, GuideStream, compute_sequence};
 use fluidymation::img::Plane;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-/// The system allocator, counting the live heap bytes and their peak.
-struct Counting;
-
-static LIVE: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-
-fn grew(by: usize) {
-    let now = LIVE.fetch_add(by, Ordering::Relaxed) + by;
-    PEAK.fetch_max(now, Ordering::Relaxed);
-}
-
-// SAFETY: every call is forwarded to `System` unchanged; the counters only observe sizes.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let p = unsafe { System.alloc(layout) };
-        if !p.is_null() {
-            grew(layout.size());
-        }
-        p
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        let p = unsafe { System.alloc_zeroed(layout) };
-        if !p.is_null() {
-            grew(layout.size());
-        }
-        p
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) };
-        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let p = unsafe { System.realloc(ptr, layout, new_size) };
-        if !p.is_null() {
-            LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
-            grew(new_size);
-        }
-        p
-    }
-}
+mod alloc_support;
+use alloc_support::Counting;
 
 #[global_allocator]
 static ALLOC: Counting = Counting;
@@ -91,7 +51,7 @@ fn cpu_seconds() -> f64 {
 /// Streams `n` frames of the blob and returns the peak of live heap bytes during it and the
 /// bytes the stream keeps (compact masks and backward-pass checkpoints).
 fn run_stream(n: usize) -> (usize, usize) {
-    PEAK.store(LIVE.load(Ordering::Relaxed), Ordering::Relaxed);
+    alloc_support::reset_peak();
     let params = GuideParams::default();
     let (t0, c0) = (Instant::now(), cpu_seconds());
     let stream = GuideStream::new(n, |i| Ok(blob(i)), &params).unwrap();
@@ -112,10 +72,10 @@ fn run_stream(n: usize) -> (usize, usize) {
         (t2 - t1).as_secs_f64(),
         c2 - c1,
         stored as f64 / 1e6,
-        PEAK.load(Ordering::Relaxed) as f64 / 1e6,
+        alloc_support::peak() as f64 / 1e6,
         status("VmHWM")
     );
-    (PEAK.load(Ordering::Relaxed), stored)
+    (alloc_support::peak(), stored)
 }
 
 /// The forward pass's working set for `n` frames: one segment of `K = ⌈√n⌉` frames' flows and

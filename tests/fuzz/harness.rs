@@ -4,44 +4,13 @@
 //! [`MEMORY_BOUND`] is a failure: its input is saved under `tests/fuzz/regressions/<reader>/`
 //! and replayed by every normal test run afterwards ([`replay`]).
 
-use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::Ordering;
 use std::sync::{Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
-/// Counts the bytes allocated now and at the peak.
-pub struct Counting;
-
-static CURRENT: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
-        let p = unsafe { System.alloc(l) };
-        if !p.is_null() {
-            let now = CURRENT.fetch_add(l.size(), Ordering::Relaxed) + l.size();
-            PEAK.fetch_max(now, Ordering::Relaxed);
-        }
-        p
-    }
-    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
-        unsafe { System.dealloc(p, l) };
-        CURRENT.fetch_sub(l.size(), Ordering::Relaxed);
-    }
-    unsafe fn realloc(&self, p: *mut u8, l: Layout, new: usize) -> *mut u8 {
-        let q = unsafe { System.realloc(p, l, new) };
-        if !q.is_null() {
-            if new >= l.size() {
-                let now = CURRENT.fetch_add(new - l.size(), Ordering::Relaxed) + new - l.size();
-                PEAK.fetch_max(now, Ordering::Relaxed);
-            } else {
-                CURRENT.fetch_sub(l.size() - new, Ordering::Relaxed);
-            }
-        }
-        q
-    }
-}
+use crate::alloc_support;
+pub use crate::alloc_support::Counting;
 
 /// Most memory one case may allocate above what was in use before it.
 pub const MEMORY_BOUND: usize = 512 << 20;
@@ -186,12 +155,11 @@ fn copy_dir(from: &Path, to: &Path) {
 /// Runs `check` on `dir` once: its time, its peak above the memory in use before, and the
 /// panic message if it panicked.
 fn measure(check: fn(&Path), dir: &Path) -> (Duration, usize, Option<String>) {
-    let base = CURRENT.load(Ordering::Relaxed);
-    PEAK.store(base, Ordering::Relaxed);
+    let base = alloc_support::reset_peak();
     let t = Instant::now();
     let r = std::panic::catch_unwind(|| check(dir));
     let took = t.elapsed();
-    let peak = PEAK.load(Ordering::Relaxed).saturating_sub(base);
+    let peak = alloc_support::peak().saturating_sub(base);
     let msg = r.err().map(|e| {
         e.downcast_ref::<String>()
             .cloned()

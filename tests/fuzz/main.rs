@@ -9,6 +9,8 @@
 //! runs the heavy campaign of 201 500 cases and prints per reader the cases, failures, the
 //! slowest case and the largest peak.
 
+#[path = "../alloc_support/mod.rs"]
+mod alloc_support;
 mod exemplar;
 mod harness;
 mod lottie;
