@@ -452,13 +452,13 @@ impl ParamsBuilder {
     /// Default: on (CLI `--no-grain` switches it off). It gives the output the exemplar's grain:
     /// on the quality suite (κ = 2 in the search and the finest merge, the search's estimates
     /// voted with σ = 0.5; 24 frames at 512², every bundled exemplar) contrast rose on all 25
-    /// moving runs (mean 0.694 → 0.766; ≥ 0.85 of the exemplar's on 8 instead of none), the
-    /// palette stayed (within 0.03 on 17 of 30 runs instead of 16), and the grain it gives back
-    /// changes from frame to frame with the field: incoherent change 0.753 → 0.898 on average,
-    /// the ellipses at most 1.11 (yellow-granules), within the 1.2 of the exemplar's own change
-    /// that the issue allows; the limbs 1.15–2.01. With the blurred estimate and the merge at
-    /// face value of earlier versions the same flag made the ellipses boil (up to 1.78), and it
-    /// was off by default.
+    /// moving runs (mean 0.694 → 0.766; ≥ 0.85 of the exemplar's on 8 of 30 still and moving
+    /// runs instead of none), the palette stayed (within 0.03 on 17 of 30 runs instead of 16),
+    /// and the grain it gives back changes from frame to frame with the field: incoherent
+    /// change 0.753 → 0.898 on average, the ellipses at most 1.11 (yellow-granules), within
+    /// the 1.2 of the exemplar's own change that the issue allows; the limbs 1.15–2.01. With
+    /// the blurred estimate and the merge at face value of earlier versions the same flag made
+    /// the ellipses boil (up to 1.78), and it was off by default.
     pub fn keep_grain(mut self, on: bool) -> Self {
         self.p.keep_grain = on;
         self
