@@ -30,6 +30,8 @@ pub enum Error {
         column: usize,
         /// What serde_json reported.
         message: String,
+        /// serde_json's own error ([`std::error::Error::source`]).
+        source: Option<Box<dyn std::error::Error + Send + Sync>>,
     },
     /// A TOML file (exemplar metadata, styles file) could not be parsed.
     Toml {
@@ -37,6 +39,8 @@ pub enum Error {
         path: PathBuf,
         /// What went wrong, with the location when known.
         message: String,
+        /// The TOML parser's or writer's own error ([`std::error::Error::source`]).
+        source: Option<Box<dyn std::error::Error + Send + Sync>>,
     },
     /// An animation file parsed but its content is not usable (missing `w`, NaN values, …).
     InvalidAnimation {
@@ -51,6 +55,8 @@ pub enum Error {
         path: PathBuf,
         /// The decoder's message.
         message: String,
+        /// The codec's own error where there is one ([`std::error::Error::source`]).
+        source: Option<Box<dyn std::error::Error + Send + Sync>>,
     },
     /// Images of one sequence do not all have the same size.
     SizeMismatch {
@@ -136,9 +142,19 @@ impl Error {
         Error::InvalidAnimation { path: path.as_ref().to_path_buf(), message: message.into() }
     }
 
-    /// Shorthand for an [`Error::Image`].
+    /// Shorthand for an [`Error::Image`] without a source error.
     pub fn image(path: impl AsRef<Path>, message: impl fmt::Display) -> Self {
-        Error::Image { path: path.as_ref().to_path_buf(), message: message.to_string() }
+        Error::Image { path: path.as_ref().to_path_buf(), message: message.to_string(), source: None }
+    }
+
+    /// An [`Error::Image`] from the codec's error, kept as its source.
+    pub fn image_codec(path: impl AsRef<Path>, error: impl std::error::Error + Send + Sync + 'static) -> Self {
+        Error::Image { path: path.as_ref().to_path_buf(), message: error.to_string(), source: Some(Box::new(error)) }
+    }
+
+    /// An [`Error::Toml`] from the TOML parser's or writer's error, kept as its source.
+    pub fn toml(path: impl AsRef<Path>, error: impl std::error::Error + Send + Sync + 'static) -> Self {
+        Error::Toml { path: path.as_ref().to_path_buf(), message: error.to_string(), source: Some(Box::new(error)) }
     }
 
     /// Shorthand for an [`Error::Exemplar`].
@@ -160,12 +176,12 @@ impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Error::Io { path, source } => write!(f, "'{}': {}", path.display(), source),
-            Error::Json { path, line, column, message } => {
+            Error::Json { path, line, column, message, .. } => {
                 write!(f, "'{}' is not valid JSON at line {}, column {}: {}", path.display(), line, column, message)
             }
-            Error::Toml { path, message } => write!(f, "'{}' is not valid TOML: {}", path.display(), message),
+            Error::Toml { path, message, .. } => write!(f, "'{}' is not valid TOML: {}", path.display(), message),
             Error::InvalidAnimation { path, message } => write!(f, "'{}': {}", path.display(), message),
-            Error::Image { path, message } => write!(f, "image '{}': {}", path.display(), message),
+            Error::Image { path, message, .. } => write!(f, "image '{}': {}", path.display(), message),
             Error::SizeMismatch { path, expected, found } => write!(
                 f,
                 "'{}' is {}x{} but the sequence's first image is {}x{}; all frames must have the same size",
@@ -206,7 +222,30 @@ impl std::error::Error for Error {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
             Error::Io { source, .. } => Some(source),
+            Error::Json { source: Some(s), .. }
+            | Error::Toml { source: Some(s), .. }
+            | Error::Image { source: Some(s), .. } => Some(s.as_ref()),
             _ => None,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::error::Error as _;
+
+    #[test]
+    fn parser_and_codec_errors_keep_their_source() {
+        // A PNG signature followed by garbage: the codec's error is the source.
+        let e = crate::img::decode(b"\x89PNG\r\n\x1a\n garbage", Path::new("x.png"), 100).unwrap_err();
+        assert!(matches!(e, Error::Image { .. }), "{e}");
+        assert!(e.source().and_then(|s| s.downcast_ref::<image::ImageError>()).is_some(), "{e:?}");
+        let t = toml::from_str::<toml::Value>("name = [").unwrap_err();
+        let e = Error::toml("x.toml", t);
+        assert!(e.to_string().starts_with("'x.toml' is not valid TOML: "), "{e}");
+        assert!(e.source().and_then(|s| s.downcast_ref::<toml::de::Error>()).is_some(), "{e:?}");
+        // A message of our own has no source to show.
+        assert!(Error::image("x.png", "nothing to draw").source().is_none());
     }
 }

@@ -260,7 +260,12 @@ fn load_err(text: &str) -> Error {
 #[test]
 fn errors_name_the_problem() {
     match load_err("{\n  \"w\": 10,\n  \"h\": 10 oops\n}") {
-        Error::Json { line, column, .. } => assert_eq!((line, column), (3, 11)),
+        e @ Error::Json { line, column, .. } => {
+            assert_eq!((line, column), (3, 11));
+            // The parser's own error is kept as the source, for callers that walk the chain.
+            let source = std::error::Error::source(&e).expect("a JSON error keeps serde_json's error");
+            assert!(source.downcast_ref::<serde_json::Error>().is_some_and(|j| j.line() == 3), "{source:?}");
+        }
         e => panic!("{e}"),
     }
     let msg = |t: &str| load_err(t).to_string();

@@ -181,8 +181,7 @@ fn validate_meta(meta: &ExemplarMeta, path: &Path) -> Result<()> {
 
 /// Parses `exemplar.toml` text; `path` names the file in errors.
 pub(crate) fn parse_meta(text: &str, path: &Path) -> Result<ExemplarMeta> {
-    let meta: ExemplarMeta =
-        toml::from_str(text).map_err(|e| Error::Toml { path: path.to_path_buf(), message: e.to_string() })?;
+    let meta: ExemplarMeta = toml::from_str(text).map_err(|e| Error::toml(path, e))?;
     validate_meta(&meta, path)?;
     Ok(meta)
 }
@@ -367,8 +366,7 @@ impl Exemplar {
             write_png(&tmp.join("masks").join(&name), m.width(), m.height(), image::ExtendedColorType::L8, &mask)
         })?;
         let path = tmp.join("exemplar.toml");
-        let text =
-            toml::to_string(&self.meta).map_err(|e| Error::Toml { path: path.clone(), message: e.to_string() })?;
+        let text = toml::to_string(&self.meta).map_err(|e| Error::toml(&path, e))?;
         img::atomic_write(&path, |w| w.write_all(text.as_bytes()))
     }
 

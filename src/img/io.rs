@@ -50,7 +50,7 @@ pub fn decode(bytes: &[u8], path: &Path, max_side: u32) -> Result<image::Dynamic
     let reader =
         image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format().map_err(|e| Error::io(path, e))?;
     let format = reader.format();
-    let (w, h) = reader.into_dimensions().map_err(|e| Error::image(path, e))?;
+    let (w, h) = reader.into_dimensions().map_err(|e| Error::image_codec(path, e))?;
     if w.max(h) > max_side {
         return Err(Error::Limit {
             path: path.to_path_buf(),
@@ -78,7 +78,7 @@ pub fn decode(bytes: &[u8], path: &Path, max_side: u32) -> Result<image::Dynamic
     limits.max_image_height = Some(max_side);
     limits.max_alloc = Some(MAX_DECODE_BYTES);
     reader.limits(limits);
-    reader.decode().map_err(|e| Error::image(path, e))
+    reader.decode().map_err(|e| Error::image_codec(path, e))
 }
 
 fn open(path: &Path) -> Result<image::DynamicImage> {

@@ -234,7 +234,7 @@ impl GifWriter {
     fn encoding_error(&self, e: gif::EncodingError) -> Error {
         match e {
             gif::EncodingError::Io(io) => Error::io(&self.path, io),
-            other => Error::image(&self.path, other),
+            other => Error::image_codec(&self.path, other),
         }
     }
 

@@ -76,7 +76,7 @@ impl Paint {
     pub fn load(path: &Path) -> Result<Paint> {
         let reader = image::ImageReader::open(path).map_err(|e| Error::io(path, e))?;
         let decoded = reader.with_guessed_format().map_err(|e| Error::io(path, e))?.decode();
-        let img = decoded.map_err(|e| Error::image(path, e))?.into_rgba16();
+        let img = decoded.map_err(|e| Error::image_codec(path, e))?.into_rgba16();
         let (w, h) = img.dimensions();
         Ok(Paint { width: w as usize, height: h as usize, data: img.into_raw() })
     }

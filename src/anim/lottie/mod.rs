@@ -52,6 +52,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Model> {
         line: e.line(),
         column: e.column(),
         message: e.to_string(),
+        source: Some(Box::new(e)),
     })?;
     let need = |v: Option<f64>, key: &str, what: &str| -> Result<f64> {
         match v {
