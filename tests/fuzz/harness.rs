@@ -10,7 +10,6 @@ use std::sync::{Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
 use crate::alloc_support;
-pub use crate::alloc_support::Counting;
 
 /// Most memory one case may allocate above what was in use before it.
 pub const MEMORY_BOUND: usize = 512 << 20;

@@ -23,7 +23,7 @@ mod svg;
 use harness::{Reader, Report};
 
 #[global_allocator]
-static ALLOC: harness::Counting = harness::Counting;
+static ALLOC: alloc_support::Counting = alloc_support::Counting;
 
 const READERS: [Reader; 5] = [lottie::READER, svg::READER, masks::READER, exemplar::READER, state::READER];
 
