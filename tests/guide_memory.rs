@@ -93,7 +93,7 @@ fn segment_bytes(n: usize) -> usize {
 /// Measured (release, 2 threads, two runs alike): peak heap 65.7 MB for 50 frames, 110.0 MB
 /// for 400; the stream keeps 8.6 and 28.4 MB, and its segment grows from 8 to 20 frames, so
 /// by design the peak may grow by ≈ 42 MB (it grew by 44.3). The process's peak resident set
-/// was 132–156 MB over five runs. Holding every guide of every frame would take 400 × 800 000
+/// was 132–156 MB over six runs. Holding every guide of every frame would take 400 × 800 000
 /// px × 28 B ≈ 9 GB. Bounds: the growth at most the designed one plus 8 MB; the peak heap
 /// under 150 MB.
 #[test]
