@@ -11,6 +11,7 @@
 
 use fluidymation::NoProgress;
 use fluidymation::quality::{self, SuiteOptions, SuiteReport, TargetKind};
+use fluidymation::synth::Params;
 
 fn suite(options: SuiteOptions) -> SuiteReport {
     let report = quality::run(&options, &NoProgress).unwrap();
@@ -55,24 +56,27 @@ fn check(what: &str, value: Option<f32>, floor: f32, higher: bool, failures: &mu
 /// Measured (`quality -e blue-bloom -e ink-rims --target growing --target translating
 /// --frames 24`; κ = 2 in the search and the finest merge, the search's estimates voted with
 /// σ = 0.5, the grain kept, advection by warping the field, the extent term only where no
-/// paint is carried): IoU of the alpha 0.996–0.997, contrast 0.77–0.91 (of the exemplar's at
-/// the same depths), edge darkening 0.67–0.94, palette 0.007–0.050, incoherent change
-/// 0.63–0.76, motion agreement 0.61–0.68. Without the grain (`--no-grain`): contrast 0.69–0.85,
-/// incoherent change 0.55–0.62, the rest within 0.01. Before the sharper estimate and κ in the
-/// merge (no grain): contrast 0.67–0.76, edge darkening 0.69–0.95, palette 0.007–0.042,
-/// incoherent change 0.57–0.71. With the extent term everywhere (the paper) edge darkening was
-/// 0.62–0.82, palette up to 0.075 and incoherent change 0.76–0.84; with the advection that
-/// moved each match in the exemplar by its own rest, incoherent change was 0.92–1.07. Before
-/// the fidelity work the same targets (48 frames, README) scored IoU α 0.92–0.94, edge
-/// darkening −0.27–0.27 and incoherent change 1.22–2.0.
+/// paint is carried and faded out in the interior): IoU of the alpha 0.996–0.997, contrast
+/// 0.81–0.92 (of the exemplar's at the same depths), edge darkening 0.70–1.02, palette
+/// 0.010–0.035, incoherent change 0.55–0.75, motion agreement 0.61–0.68. With the extents
+/// weighing the same deep inside (`--without extent-falloff`, the previous default): contrast
+/// 0.77–0.91, edge darkening 0.67–0.94, palette 0.007–0.050, incoherent change 0.63–0.76.
+/// Without the grain (`--no-grain`, before the falloff): contrast 0.69–0.85, incoherent change
+/// 0.55–0.62. Before the sharper estimate and κ in the merge (no grain): contrast 0.67–0.76,
+/// edge darkening 0.69–0.95, palette 0.007–0.042, incoherent change 0.57–0.71. With the extent
+/// term everywhere (the paper) edge darkening was 0.62–0.82, palette up to 0.075 and
+/// incoherent change 0.76–0.84; with the advection that moved each match in the exemplar by
+/// its own rest, incoherent change was 0.92–1.07. Before the fidelity work the same targets
+/// (48 frames, README) scored IoU α 0.92–0.94, edge darkening −0.27–0.27 and incoherent change
+/// 1.22–2.0.
 ///
 /// The floors are reached for coverage, incoherent change (≤ 1.2), motion agreement
-/// (≥ 0.6), the rim of three of the four runs and the contrast of ink-rims (0.89–0.91); not
-/// yet for blue-bloom's contrast (0.77–0.78), blue-bloom growing's rim (0.8: 0.67) and
-/// ink-rims' palette (0.03: 0.039–0.050). The floors below are the measured values less a
-/// margin (~0.03–0.1; the spread between seeds and targets is ~0.05): contrast 0.72 against
-/// 0.77, edge darkening 0.62 against 0.67, palette 0.06 against 0.050, incoherent change 0.85
-/// against 0.76, motion 0.55 against 0.61.
+/// (≥ 0.6), the rim of three of the four runs, the contrast of ink-rims (0.88–0.92) and the
+/// palette of three; not yet for blue-bloom's contrast (0.81–0.82), blue-bloom growing's rim
+/// (0.8: 0.70) and ink-rims growing's palette (0.03: 0.035). The floors below are the measured
+/// values less a margin (~0.03–0.1; the spread between seeds and targets is ~0.05): contrast
+/// 0.76 against 0.81, edge darkening 0.64 against 0.70, palette 0.045 against 0.035,
+/// incoherent change 0.85 against 0.75, motion 0.55 against 0.61.
 #[test]
 fn moving_targets_keep_the_rim_texture_and_coherence() {
     let report = suite(SuiteOptions {
@@ -87,9 +91,9 @@ fn moving_targets_keep_the_rim_texture_and_coherence() {
         let s = &r.summary;
         let name = |m: &str| format!("{} {} {m}", r.exemplar, r.target);
         check(&name("IoU α"), r.coverage_alpha, 0.98, true, &mut failures);
-        check(&name("contrast"), s.contrast_ratio, 0.72, true, &mut failures);
-        check(&name("edge darkening"), s.edge_darkening_ratio, 0.62, true, &mut failures);
-        check(&name("palette"), s.palette_distance_mean, 0.06, false, &mut failures);
+        check(&name("contrast"), s.contrast_ratio, 0.76, true, &mut failures);
+        check(&name("edge darkening"), s.edge_darkening_ratio, 0.64, true, &mut failures);
+        check(&name("palette"), s.palette_distance_mean, 0.045, false, &mut failures);
         check(&name("incoherent change"), s.incoherent_change_ratio, 0.85, false, &mut failures);
         check(&name("motion agreement"), s.motion_agreement, 0.55, true, &mut failures);
     }
@@ -103,16 +107,17 @@ fn moving_targets_keep_the_rim_texture_and_coherence() {
 ///
 /// Measured (`quality -e ink-rims -e blue-bloom --target long --scale 0.5`; κ = 2 in the
 /// search and the finest merge, the search's estimates voted with σ = 0.5, the grain kept,
-/// advection by warping the field, the extent term only where no paint is carried): lowest
-/// window ÷ first, contrast and rim: ink-rims 0.83 and 0.99, blue-bloom 0.76 and 0.70 (its
-/// first window has the young bloom's strong rim, which then settles); over the whole run
-/// contrast 0.62 and 0.55, edge darkening 1.30 and 0.75. Without the grain the minima were
-/// the same within 0.02. The floor (0.9 in every window) is reached by ink-rims' rim
-/// only. Before the sharper estimate and κ in the merge the minima were ink-rims 0.83/0.99 and
-/// blue-bloom 0.73/0.76 (floors 0.77/0.92 and 0.67/0.7): blue-bloom's rim is the one measure
-/// these changes lowered (0.76 → 0.70) while they raised green-wash's from 0.05 to 0.28 and
-/// its contrast from 0.43 to 0.61 (README, `quality`). The floors here are the minima less
-/// 0.06–0.08.
+/// advection by warping the field, the extent term only where no paint is carried and faded
+/// out in the interior): lowest window ÷ first, contrast and rim: ink-rims 0.80 and 0.98,
+/// blue-bloom 0.74 and 0.74 (its first window has the young bloom's strong rim, which then
+/// settles); over the whole run contrast 0.62 and 0.57, edge darkening 1.31 and 0.78. The
+/// issue's floor (0.9 in every window) is reached by ink-rims' rim only. Before the extent
+/// falloff the minima were ink-rims 0.83/0.99 and blue-bloom 0.76/0.70 (the falloff raises
+/// the first window's contrast more than the later ones': the later windows' absolute
+/// contrast moved by −0.01 to +0.04); before the sharper estimate and κ in the merge
+/// 0.83/0.99 and 0.73/0.76. Green-wash, the hardest (README, `quality`), went from 0.43/0.05
+/// to 0.61/0.28 with those and to 0.64/0.42 with the falloff. The floors here are the minima
+/// less 0.04–0.10.
 #[test]
 fn long_target_keeps_its_paint_in_every_window() {
     let report = suite(SuiteOptions {
@@ -134,6 +139,46 @@ fn long_target_keeps_its_paint_in_every_window() {
         // And the paint is still the exemplar's: its texture and rim, not a flat fill.
         check(&format!("{name} contrast"), r.summary.contrast_ratio, 0.4, true, &mut failures);
         check(&format!("{name} edge darkening"), r.summary.edge_darkening_ratio, 0.6, true, &mut failures);
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The extent falloff (`Params::extent_falloff`, on by default) gives a still shape's interior
+/// the exemplar's texture instead of its calm core: with the extents weighing as much deep
+/// inside as at the edge, a still ellipse matched its interior to the exemplar's
+/// least-travelled paint (84 % of green-wash's matches from the calmest quarter of its
+/// interior). The ablation, at the size users run (512², 12 frames).
+///
+/// Measured (`quality -e green-wash -e yellow-granules --target still --frames 12`, with and
+/// without `--without extent-falloff`): contrast green-wash 0.808 against 0.694,
+/// yellow-granules 0.936 against 0.792; palette 0.025 against 0.030 and 0.024 against 0.035
+/// (blue-bloom, whose core is not calm, 0.858 against 0.846). Floors: the falloff raises the
+/// contrast by at least 0.07 (measured +0.11 and +0.14) to at least 0.75 (0.81), and does not
+/// move the palette away from the exemplar's by more than 0.005.
+#[test]
+fn extent_falloff_gives_still_interiors_the_exemplar_texture() {
+    let run = |falloff: bool| {
+        suite(SuiteOptions {
+            exemplars: vec!["green-wash".into(), "yellow-granules".into()],
+            targets: vec![TargetKind::Still],
+            identity: false,
+            frames: 12,
+            params: Params::builder().extent_falloff(falloff).build().unwrap(),
+            ..SuiteOptions::default()
+        })
+    };
+    let (with, without) = (run(true), run(false));
+    let mut failures = Vec::new();
+    for (a, b) in with.rows.iter().zip(&without.rows) {
+        let (ca, cb) = (a.summary.contrast_ratio.unwrap(), b.summary.contrast_ratio.unwrap());
+        let (pa, pb) = (a.summary.palette_distance_mean.unwrap(), b.summary.palette_distance_mean.unwrap());
+        let name = &a.exemplar;
+        if ca < cb + 0.07 || ca < 0.75 {
+            failures.push(format!("{name}: contrast {ca:.3} with the falloff, {cb:.3} without"));
+        }
+        if pa > pb + 0.005 {
+            failures.push(format!("{name}: palette {pa:.3} with the falloff, {pb:.3} without"));
+        }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }

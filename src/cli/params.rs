@@ -90,7 +90,8 @@ pub struct SynthFlags {
     /// Switch one part of the method off, to see what it does (repeatable): direction-rule
     /// (patches unrotated), time-shift (no SHIFTNNF), segments (interior and border patches
     /// mixed), advection (no residual advection or rim re-anchoring), extent-normalization
-    /// (raw target extents, as in the paper).
+    /// (raw target extents, as in the paper), extent-falloff (the extents weigh as much deep
+    /// inside a shape as at its edge, as in the paper).
     #[arg(long, value_name = "PART", value_enum)]
     pub without: Vec<Part>,
 }
@@ -103,6 +104,7 @@ pub enum Part {
     Segments,
     Advection,
     ExtentNormalization,
+    ExtentFalloff,
 }
 
 impl SynthFlags {
@@ -176,6 +178,7 @@ impl SynthFlags {
                 Part::Segments => b.segments(false),
                 Part::Advection => b.advect(false),
                 Part::ExtentNormalization => b.ext_normalize(false),
+                Part::ExtentFalloff => b.extent_falloff(false),
             };
         }
         Ok(b.build()?)

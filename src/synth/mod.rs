@@ -475,7 +475,7 @@ impl Synthesizer {
             let sl = &src.levels[l];
             let gl = &pyr[l];
             let (lw, lh) = gl.mask.size();
-            let mut tgt = timed(&mut st.target, || TargetLevel::new(gl, &src.quant, b, ext_cap, paper));
+            let mut tgt = timed(&mut st.target, || TargetLevel::new(gl, &src.quant, b, ext_cap, sl.ext_falloff, paper));
             masks[l] = shift::mask_flags(&tgt);
             let keys = |it: u64| [p.seed, self.frame as u64, l as u64, it];
             // Temporal guide T^prev and m(q) from the down-scaled shifted field.

@@ -318,7 +318,7 @@ mod tests {
         let pyr = SourcePyramid::build(&rgb, &g, &params, 4.0, 1);
         let src = &pyr.levels[0];
         let tg = disc_guides(36, 30, glam::Vec2::new(18.0, 15.0), 11.0, 0.5, 2, 5);
-        let tgt = TargetLevel::new(&tg, &pyr.quant, 4.0, None, [1.0; 3]);
+        let tgt = TargetLevel::new(&tg, &pyr.quant, 4.0, None, src.ext_falloff, [1.0; 3]);
         let lambda = 0.7;
         let mut occ = Occurrence::new();
         let fields: Vec<Nnf> = (0..3).map(|k| random_field(src, &tgt, k)).collect();

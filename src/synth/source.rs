@@ -238,6 +238,10 @@ pub(crate) struct SourceLevel {
     /// colors within their own segment (paint or paper), 0..=255, and in lane 3 the local
     /// standard deviation of the grain (color − low-pass), in units of 1/1020.
     pub grain: Vec<[u8; 4]>,
+    /// Whether the extent lanes of this level fade out in the interior
+    /// ([`ParamsBuilder::extent_falloff`](super::ParamsBuilder::extent_falloff) and
+    /// [`EXTENT_FALLOFF_MIN_SIDE`]); the target's level does the same.
+    pub ext_falloff: bool,
 }
 
 impl SourceLevel {
@@ -477,8 +481,10 @@ impl SourcePyramid {
                 cur_rgb = cur_rgb.iter().map(img::downsample2).collect();
                 cur_g = cur_g.iter().map(|g| g.downsample2()).collect();
             }
-            let mut level =
-                build_level(&cur_rgb, &cur_g, &quant, quant.weights(params.w_df, params.w_ext, v), border_width);
+            let (lw, lh) = cur_rgb[0].size();
+            let falloff = params.extent_falloff && lw.min(lh) >= EXTENT_FALLOFF_MIN_SIDE;
+            let weights = quant.weights(params.w_df, params.w_ext, v);
+            let mut level = build_level(&cur_rgb, &cur_g, &quant, weights, border_width, falloff);
             if l == 0 && params.keep_grain {
                 build_grain(&mut level, &cur_rgb, &cur_g);
             }
@@ -541,7 +547,40 @@ pub(crate) fn color_variance(frames: &[Plane<Rgb>], guides: &[FrameGuides]) -> f
     if n == 0 { 1e-2 } else { ((sum / n as f64) as f32).clamp(1e-4, 1.0) }
 }
 
-fn build_level(rgb: &[Plane<Rgb>], guides: &[FrameGuides], qn: &Quant, lane_w: [f32; LANES], b: f32) -> SourceLevel {
+/// The smallest exemplar frame side (pixels of the level) at which the extent lanes fade out in
+/// the interior: 10 patch widths. At coarser levels a patch covers much of the exemplar's paint,
+/// the occurrence term Ω (which counts the taps of whole windows) cannot tell the reuse of one
+/// spot from uniform use, and an interior left free of the extents collapses onto one spot
+/// whose pattern then repeats over the target at the level's pixel pitch (a 16-px lattice on a
+/// still ellipse at the fourth level down). There the extents keep the interior's layout.
+pub(crate) const EXTENT_FALLOFF_MIN_SIDE: usize = 10 * super::params::PATCH;
+
+/// The factor of the extent lanes at depth `r = d/b` (distance from the edge over the border
+/// width) when they fade out in the interior: 1 in the border band (r ≤ 1), falling linearly
+/// to 0 at r = 2.
+///
+/// The extents say how far the paint has travelled to a pixel. Near the edge that decides
+/// the rim (advancing, receding, settled); deep inside, it ties the target's interior to the
+/// exemplar's least-travelled paint — where its drop landed, its flat and pale core — whenever
+/// the target's interior has moved less than the exemplar's paint (a still shape, the first
+/// frame of any shape): the interior then copies the calmest quarter of the exemplar
+/// (measured: 84 % of the matches of a still ellipse, green-wash), and its 7×7 contrast is
+/// 0.6 of the exemplar's at the same depths. Without the extents there, the interior is
+/// matched by texture, border channel and uniformity alone.
+#[inline]
+pub(crate) fn extent_falloff(r: f32) -> f32 {
+    (2.0 - r).clamp(0.0, 1.0)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn build_level(
+    rgb: &[Plane<Rgb>],
+    guides: &[FrameGuides],
+    qn: &Quant,
+    lane_w: [f32; LANES],
+    b: f32,
+    falloff: bool,
+) -> SourceLevel {
     let (w, h) = rgb[0].size();
     let stride = w + 2 * PAD;
     let frame_len = stride * (h + 2 * PAD);
@@ -559,7 +598,8 @@ fn build_level(rgb: &[Plane<Rgb>], guides: &[FrameGuides], qn: &Quant, lane_w: [
             let ep = g.ext_pos.get(x, y);
             let en = g.ext_neg.get(x, y);
             let idx = i * frame_len + offset;
-            let v = [col[0], col[1], col[2], df, ep, en, 0.0, 0.0];
+            let fade = if falloff { extent_falloff(dist / b) } else { 1.0 };
+            let v = [col[0], col[1], col[2], df, ep * fade, en * fade, 0.0, 0.0];
             feat[idx] = std::array::from_fn(|k| if k < 6 { qn.quantize(k, v[k]) } else { 0 });
             if !inside {
                 continue;
@@ -607,6 +647,7 @@ fn build_level(rgb: &[Plane<Rgb>], guides: &[FrameGuides], qn: &Quant, lane_w: [
         seg_count,
         lane_w,
         grain: Vec::new(),
+        ext_falloff: falloff,
     }
 }
 

@@ -3,7 +3,7 @@
 //! the guide channels, and per-pixel info.
 
 use super::params::HALF;
-use super::source::{IN_MASK, INTERIOR, LANES, PixInfo, Quant, VALID, dilate, flow_dir};
+use super::source::{IN_MASK, INTERIOR, LANES, PixInfo, Quant, VALID, dilate, extent_falloff, flow_dir};
 use crate::guide::FrameGuides;
 use crate::img::Rgb;
 use rayon::prelude::*;
@@ -31,8 +31,17 @@ pub(crate) struct TargetLevel {
 }
 
 impl TargetLevel {
-    /// Builds the level from its guides. `ext_cap` clamps the extents (None = no clamp).
-    pub fn new(g: &FrameGuides, quant: &Quant, border_width: f32, ext_cap: Option<f32>, fill: Rgb) -> TargetLevel {
+    /// Builds the level from its guides. `ext_cap` clamps the extents (None = no clamp);
+    /// `falloff` fades them out in the interior as the source level does
+    /// ([`super::source::extent_falloff`]).
+    pub fn new(
+        g: &FrameGuides,
+        quant: &Quant,
+        border_width: f32,
+        ext_cap: Option<f32>,
+        falloff: bool,
+        fill: Rgb,
+    ) -> TargetLevel {
         let (w, h) = g.mask.size();
         let stride = w + 2 * TPAD;
         let cap = ext_cap.unwrap_or(f32::INFINITY);
@@ -44,8 +53,9 @@ impl TargetLevel {
                 let x = (px as isize - TPAD as isize).clamp(0, w as isize - 1) as usize;
                 let dist = g.dist.get(x, y);
                 let df = (dist / border_width).min(1.0);
-                let ep = g.ext_pos.get(x, y).min(cap);
-                let en = g.ext_neg.get(x, y).min(cap);
+                let fade = if falloff { extent_falloff(dist / border_width) } else { 1.0 };
+                let ep = g.ext_pos.get(x, y).min(cap) * fade;
+                let en = g.ext_neg.get(x, y).min(cap) * fade;
                 let v = [fill[0], fill[1], fill[2], df, ep, en, 0.0, 0.0];
                 // Guide lanes on the source's 8-bit grid (identical guides compare exactly equal).
                 *out = std::array::from_fn(|k| {
