@@ -463,7 +463,7 @@ impl ParamsBuilder {
     /// contrast ≥ 0.85 of the exemplar's on 13 of the 30 still and moving runs instead of 8
     /// (the stills: green-wash 0.68 → 0.80, ink-rims 0.71 → 0.86, yellow-granules 0.79 → 0.93),
     /// the palette within 0.03 on 20 runs instead of 17, edge darkening 0.896 → 0.908 and
-    /// incoherent change 0.898 → 0.878 on average over the 25 moving runs; the identity
+    /// incoherent change 0.898 → 0.890 on average over the 25 moving runs; the identity
     /// unchanged. At the coarsest levels the interior would collapse onto one exemplar spot
     /// and repeat it as a lattice at the level's pixel pitch (see
     /// `source::EXTENT_FALLOFF_MIN_SIDE`), so the falloff starts where the exemplar's frames
