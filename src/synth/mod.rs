@@ -6,7 +6,9 @@
 //! colors from it (module `vote`). Temporal coherence comes from the previous frame's field,
 //! shifted along the exemplar's own time axis (module `shift`), which both initializes the search
 //! and votes the temporal guide `T^prev`. A 3D occurrence map keeps the use of exemplar
-//! patches uniform (module `occurrence`).
+//! patches uniform (module `occurrence`). [`Synthesizer::step`] crops the frame to its working
+//! window, builds the target's pyramid and shifts the previous field; module `pyramid` runs
+//! the coarse-to-fine EM of the frame (Appendix B, Algorithm 1).
 //!
 //! ```no_run
 //! use fluidymation::{exemplar::Exemplar, guide, synth::{Params, Source, Synthesizer}};
@@ -30,6 +32,7 @@ mod occurrence;
 mod params;
 mod patch;
 mod patchmatch;
+mod pyramid;
 mod shift;
 mod source;
 mod target;
@@ -43,14 +46,10 @@ use crate::error::{Error, Result};
 use crate::exemplar::Exemplar;
 use crate::guide::FrameGuides;
 use crate::img::{self, Mask, Plane, Rgb};
-use crate::rng::SplitMix64;
-use nnf::{Match, Nnf, level_count};
-use patchmatch::Ctx;
-use rayon::prelude::*;
+use nnf::{Nnf, level_count};
 use source::MARGIN;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-use target::TargetLevel;
 
 /// An exemplar prepared for synthesis: resampled (scale, speed), with its guides and its
 /// pyramid. Cheap to clone (shared).
@@ -266,17 +265,6 @@ pub struct DebugViews {
     pub shifted: Plane<[f32; 4]>,
 }
 
-fn mean_err(nnf: &Nnf) -> f64 {
-    let (mut s, mut n) = (0.0f64, 0usize);
-    for m in &nnf.data {
-        if m.ok && m.err.is_finite() {
-            s += m.err as f64;
-            n += 1;
-        }
-    }
-    if n > 0 { s / n as f64 } else { 0.0 }
-}
-
 /// What is carried from one frame to the next.
 struct PrevState {
     /// Top-left corner of the previous frame's working window (full resolution).
@@ -385,7 +373,6 @@ impl Synthesizer {
         self.size = Some((w, h));
         let levels = self.level_count(w, h);
         let mut st = StageTimes::default();
-        let t_pyr = Instant::now();
         // Work only in the mask's bounding box (grown by the patch radius and a margin),
         // aligned so that every pyramid level keeps whole pixels.
         let Some(win) = window(&g.mask, 1 << (levels - 1)) else {
@@ -401,7 +388,72 @@ impl Synthesizer {
                 debug: None,
             });
         };
-        let full = g;
+        let pyr = timed(&mut st.target, || self.target_pyramid(g, win, levels));
+        let src = self.source.pyramid.clone();
+        let plain;
+        let p = if self.frame == 0 {
+            plain = self.first_frame_params();
+            &plain
+        } else {
+            &self.params
+        };
+        // The previous frame's state, moved into this frame's window, and its field shifted in
+        // time (SHIFTNNF) at full resolution.
+        let (prev_here, shifted) = timed(&mut st.shift, || {
+            let prev_here: Option<PrevState> = self.prev.as_ref().map(|prev| rewindow(prev, (win.0, win.1), &pyr));
+            let shifted = prev_here.as_ref().map(|prev| shift_previous(&src, p, &pyr[0], prev));
+            (prev_here, shifted)
+        });
+        let has_prev = shifted.as_ref().is_some_and(|n| n.data.iter().any(|m| m.ok));
+        let inputs = pyramid::FrameInputs {
+            src: &src,
+            pyr: &pyr,
+            params: p,
+            frame: self.frame,
+            prev: match (&shifted, &prev_here) {
+                (Some(shifted), Some(prev)) if has_prev => Some((shifted, &prev.masks[..])),
+                _ => None,
+            },
+            debug: self.debug,
+        };
+        let out = pyramid::run(&inputs, &mut st);
+        let place = Placement { full: (w, h), win };
+        let rgb = place.uncrop(&out.rgb, src.paper);
+        let debug = self.debug.then(|| DebugViews {
+            nnf: place.nnf_colors(&out.field, &src.levels[0]),
+            omega: out.omega.unwrap_or_else(|| Plane::new(1, 1)),
+            field: place.raw(&out.field),
+            shifted: shifted.as_ref().map(|f| place.raw(f)).unwrap_or_else(|| Plane::filled(w, h, [f32::NAN; 4])),
+        });
+        let g0 = &pyr[0];
+        self.prev = Some(PrevState {
+            origin: (win.0, win.1),
+            nnf0: out.field,
+            ext_pos: g0.ext_pos.data().to_vec(),
+            flow: g0.flow.data().to_vec(),
+            masks: out.masks,
+        });
+        self.frame += 1;
+        Ok(SynthFrame {
+            rgb,
+            mask: g.mask.clone(),
+            level_times: out.level_times,
+            stages: st,
+            evaluations: out.evaluations,
+            energy: out.energy,
+            debug,
+        })
+    }
+
+    /// The target's guides cropped to the working window `win`, their extents brought to the
+    /// exemplar's scale ([`ParamsBuilder::ext_normalize`]), and their pyramid of `levels`
+    /// levels, finest first.
+    fn target_pyramid(
+        &mut self,
+        g: &FrameGuides,
+        win: (usize, usize, usize, usize),
+        levels: usize,
+    ) -> Vec<FrameGuides> {
         let mut cropped = crop_guides(g, win);
         let k = match self.ext_factor {
             Some(k) => k,
@@ -414,203 +466,90 @@ impl Synthesizer {
             cropped.ext_pos = cropped.ext_pos.map(|v| v * k);
             cropped.ext_neg = cropped.ext_neg.map(|v| v * k);
         }
-        let g = &cropped;
-        let (w, h) = g.mask.size();
         let mut pyr: Vec<FrameGuides> = Vec::with_capacity(levels);
-        pyr.push(g.clone());
+        pyr.push(cropped);
         for l in 1..levels {
             let next = pyr[l - 1].downsample2();
             pyr.push(next);
         }
-        st.target += t_pyr.elapsed();
-        let src = self.source.pyramid.clone();
-        // The first frame starts from a random field: its search runs without the coherence
-        // factor κ, which would keep random matches against better ones (Params::coherence),
-        // and against the averaged estimate of the output's vote: the estimate of each pixel's
-        // own match (Params::estimate_sigma) would hold the random field's mosaic in place.
-        let plain;
-        let p = if self.frame == 0 {
-            plain = Params { coherence: 1.0, estimate_sigma: self.params.vote_sigma, ..self.params.clone() };
-            &plain
-        } else {
-            &self.params
-        };
-        let b = src.border_width;
-        let ext_cap = p.ext_clamp.then_some(src.ext_max);
-        let paper = src.paper;
+        pyr
+    }
 
-        // SHIFTNNF of the previous frame's field, at full resolution.
-        let t_shift = Instant::now();
-        let active0: Vec<bool> = source::dilate(&g.mask, HALF).into_vec();
-        // The previous frame's state, moved into this frame's window.
-        let prev_here: Option<PrevState> = self.prev.as_ref().map(|prev| rewindow(prev, (win.0, win.1), &pyr));
-        let shifted0 = prev_here.as_ref().map(|prev| {
-            let inputs = shift::ShiftInputs {
-                src: &src.levels[0],
-                ext_prev: &prev.ext_pos,
-                ext_cur: g.ext_pos.data(),
-                flow_prev: &prev.flow,
-                dist_cur: g.dist.data(),
-                band: b,
-                step_cost: shift::step_cost(src.ext_scale, src.levels[0].frames),
-                active: &active0,
-                time_shift: p.time_shift,
-                advect: p.advect,
-            };
-            shift::shift_nnf(&inputs, &prev.nnf0)
-        });
-        let has_prev = shifted0.as_ref().is_some_and(|n| n.data.iter().any(|m| m.ok));
-        st.shift += t_shift.elapsed();
+    /// The parameters of the first frame. It starts from a random field: its search runs
+    /// without the coherence factor κ, which would keep random matches against better ones
+    /// (Params::coherence), and against the averaged estimate of the output's vote: the
+    /// estimate of each pixel's own match (Params::estimate_sigma) would hold the random
+    /// field's mosaic in place.
+    fn first_frame_params(&self) -> Params {
+        Params { coherence: 1.0, estimate_sigma: self.params.vote_sigma, ..self.params.clone() }
+    }
+}
 
-        let mut level_times = Vec::with_capacity(levels);
-        let mut evaluations = 0u64;
-        let mut nnf: Option<Nnf> = None;
-        let mut masks = vec![Vec::new(); levels];
-        let mut final_rgb = Vec::new();
-        let mut energy = Vec::new();
-        let mut omega_view: Option<Plane<f32>> = None;
-        for l in (0..levels).rev() {
-            let t0 = Instant::now();
-            let from_coarsest = levels - 1 - l;
-            let sl = &src.levels[l];
-            let gl = &pyr[l];
-            let (lw, lh) = gl.mask.size();
-            let mut tgt = timed(&mut st.target, || TargetLevel::new(gl, &src.quant, b, ext_cap, sl.ext_falloff, paper));
-            masks[l] = shift::mask_flags(&tgt);
-            let keys = |it: u64| [p.seed, self.frame as u64, l as u64, it];
-            // Temporal guide T^prev and m(q) from the down-scaled shifted field.
-            let prev_down = if has_prev {
-                let shifted = timed(&mut st.shift, || shifted0.as_ref().map(|s| s.downscale(l, lw, lh)));
-                if let (Some(sd), Some(prev)) = (&shifted, &prev_here) {
-                    let voted = timed(&mut st.vote, || vote::vote(sl, sd, paper, p.estimate_sigma));
-                    write_lanes(&mut tgt, &voted, false);
-                    timed(&mut st.shift, || {
-                        shift::fill_modulation(&mut tgt, sl, sd, &prev.masks[l], b, p.prev_bounds, p.w_prev)
-                    });
-                }
-                shifted
-            } else {
-                None
-            };
-            let finest_vote_only = l == 0 && levels > 1 && !p.optimize_finest;
-            // The occurrence map's buffers, kept through the level's iterations.
-            let mut occ = occurrence::Occurrence::new();
-            // Initialization.
-            let mut field = match nnf.take() {
-                None => {
-                    let mut f = prev_down.clone().unwrap_or_else(|| Nnf::new(lw, lh));
-                    let had_prev = prev_down.is_some();
-                    let ctx = Ctx::new(sl, &tgt, None, 1.0, p, keys(u64::MAX));
-                    sanitize(&ctx, &mut f);
-                    repair(&ctx, &mut f);
-                    if !had_prev {
-                        // First frame: random field, then one guide-only PatchMatch pass (thesis §4.2).
-                        let ctx = Ctx { w_col: 0.0, ..ctx };
-                        evaluations += timed(&mut st.patchmatch, || patchmatch::sweep(&ctx, &mut f, 0)).0.evaluations;
-                    }
-                    f
-                }
-                Some(coarse) => {
-                    let mut up = coarse.upscale(lw, lh);
-                    let init = Ctx::new(sl, &tgt, None, 1.0, p, keys(u64::MAX));
-                    sanitize(&init, &mut up);
-                    repair(&init, &mut up);
-                    if let Some(mut pd) = prev_down.clone() {
-                        sanitize(&init, &mut pd);
-                        // MERGENNF: per pixel, the field with the smaller error (against the
-                        // estimate voted from the up-scaled field).
-                        let voted = timed(&mut st.vote, || vote::vote(sl, &up, paper, p.estimate_sigma));
-                        write_lanes(&mut tgt, &voted, true);
-                        let omega = if finest_vote_only {
-                            None
-                        } else {
-                            timed(&mut st.occurrence, || occ.update(sl, &up, &tgt, p.occ_radius, p.lambda))
-                        };
-                        let ctx = Ctx::new(sl, &tgt, omega, p.w_color, p, keys(0));
-                        let kappa = if finest_vote_only { p.coherence } else { 1.0 };
-                        timed(&mut st.init, || merge(&ctx, &mut up, &pd, kappa));
-                        evaluations += 2 * tgt.active.len() as u64;
-                    }
-                    up
-                }
-            };
-            if !finest_vote_only {
-                let voted = timed(&mut st.vote, || vote::vote(sl, &field, paper, p.estimate_sigma));
-                write_lanes(&mut tgt, &voted, true);
-                for opt in 0..p.opt_iters_at(from_coarsest) {
-                    for it in 0..p.pm_iters_at(from_coarsest) {
-                        let omega = timed(&mut st.occurrence, || occ.update(sl, &field, &tgt, p.occ_radius, p.lambda));
-                        let ctx = Ctx::new(sl, &tgt, omega, p.w_color, p, keys(opt as u64));
-                        let (stats, e) = timed(&mut st.patchmatch, || patchmatch::sweep(&ctx, &mut field, it));
-                        energy.push((l, e));
-                        evaluations += stats.evaluations;
-                    }
-                    energy.push((l, mean_err(&field)));
-                    let voted = timed(&mut st.vote, || vote::vote(sl, &field, paper, p.estimate_sigma));
-                    write_lanes(&mut tgt, &voted, true);
-                }
-            }
-            if !finest_vote_only && self.debug {
-                let counts = occurrence::counts(sl, &field, &tgt, p.occ_radius);
-                let norm = ((PATCH * PATCH) * (2 * p.occ_radius + 1)) as f32;
-                omega_view = Some(Plane::from_fn(sl.w, sl.h, |x, y| {
-                    (0..sl.frames).map(|i| counts[sl.index(i, x, y)] as f32).sum::<f32>() / norm
-                }));
-            }
-            if l == 0 {
-                // The output: bicubic sampling keeps rotated patches sharper than bilinear.
-                final_rgb = timed(&mut st.vote, || {
-                    if p.keep_grain {
-                        vote::vote_grain(sl, &field, paper, p.vote_sigma)
-                    } else {
-                        vote::vote_with(sl, &field, paper, p.vote_sigma, true)
-                    }
-                });
-            }
-            nnf = Some(field);
-            level_times.push(t0.elapsed());
-        }
-        let field = nnf.unwrap_or_else(|| Nnf::new(w, h));
-        let (fw, fh) = full.mask.size();
-        let inside = |x: usize, y: usize| {
-            (x >= win.0 && y >= win.1 && x < win.0 + w && y < win.1 + h).then(|| (x - win.0, y - win.1))
-        };
-        let rgb = Plane::from_fn(fw, fh, |x, y| match inside(x, y) {
-            Some((cx, cy)) => final_rgb.get(cy * w + cx).copied().unwrap_or(paper),
+/// SHIFTNNF of the previous frame's field `prev` into the current frame `g` (the finest level
+/// of its pyramid), at full resolution.
+fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevState) -> Nnf {
+    let active: Vec<bool> = source::dilate(&g.mask, HALF).into_vec();
+    let inputs = shift::ShiftInputs {
+        src: &src.levels[0],
+        ext_prev: &prev.ext_pos,
+        ext_cur: g.ext_pos.data(),
+        flow_prev: &prev.flow,
+        dist_cur: g.dist.data(),
+        band: src.border_width,
+        step_cost: shift::step_cost(src.ext_scale, src.levels[0].frames),
+        active: &active,
+        time_shift: p.time_shift,
+        advect: p.advect,
+    };
+    shift::shift_nnf(&inputs, &prev.nnf0)
+}
+
+/// Where the working window lies in the full frame: for putting its results back.
+struct Placement {
+    /// The full frame's size.
+    full: (usize, usize),
+    /// The window `(x0, y0, w, h)`.
+    win: (usize, usize, usize, usize),
+}
+
+impl Placement {
+    /// The window coordinates of full-frame pixel (x, y), if it lies in the window.
+    fn inside(&self, x: usize, y: usize) -> Option<(usize, usize)> {
+        let (x0, y0, w, h) = self.win;
+        (x >= x0 && y >= y0 && x < x0 + w && y < y0 + h).then(|| (x - x0, y - y0))
+    }
+
+    /// The window's colors `rgb` placed in a full frame of `paper`.
+    fn uncrop(&self, rgb: &[Rgb], paper: Rgb) -> Plane<Rgb> {
+        let w = self.win.2;
+        Plane::from_fn(self.full.0, self.full.1, |x, y| match self.inside(x, y) {
+            Some((cx, cy)) => rgb.get(cy * w + cx).copied().unwrap_or(paper),
             None => paper,
-        });
-        let debug = self.debug.then(|| {
-            let s0 = &src.levels[0];
-            let nnf = Plane::from_fn(fw, fh, |x, y| {
-                let Some((x, y)) = inside(x, y) else { return [0.0; 3] };
-                let m = field.get(x, y);
-                if !m.ok {
-                    return [0.0; 3];
-                }
-                [m.x / s0.w as f32, m.y / s0.h as f32, m.i as f32 / (s0.frames - 1).max(1) as f32]
-            });
-            let raw = |f: &Nnf| {
-                Plane::from_fn(fw, fh, |x, y| {
-                    let Some((x, y)) = inside(x, y) else { return [f32::NAN; 4] };
-                    let m = f.get(x, y);
-                    if !m.ok {
-                        return [f32::NAN; 4];
-                    }
-                    [m.i as f32, m.x, m.y, m.s.atan2(m.c)]
-                })
-            };
-            let shifted = shifted0.as_ref().map(raw).unwrap_or_else(|| Plane::filled(fw, fh, [f32::NAN; 4]));
-            DebugViews { nnf, omega: omega_view.unwrap_or_else(|| Plane::new(1, 1)), field: raw(&field), shifted }
-        });
-        self.prev = Some(PrevState {
-            origin: (win.0, win.1),
-            nnf0: field,
-            ext_pos: g.ext_pos.data().to_vec(),
-            flow: g.flow.data().to_vec(),
-            masks,
-        });
-        self.frame += 1;
-        Ok(SynthFrame { rgb, mask: full.mask.clone(), level_times, stages: st, evaluations, energy, debug })
+        })
+    }
+
+    /// The field as colors ([`DebugViews::nnf`]).
+    fn nnf_colors(&self, field: &Nnf, s0: &source::SourceLevel) -> Plane<Rgb> {
+        Plane::from_fn(self.full.0, self.full.1, |x, y| {
+            let Some((x, y)) = self.inside(x, y) else { return [0.0; 3] };
+            let m = field.get(x, y);
+            if !m.ok {
+                return [0.0; 3];
+            }
+            [m.x / s0.w as f32, m.y / s0.h as f32, m.i as f32 / (s0.frames - 1).max(1) as f32]
+        })
+    }
+
+    /// The field itself per full-frame pixel ([`DebugViews::field`]).
+    fn raw(&self, f: &Nnf) -> Plane<[f32; 4]> {
+        Plane::from_fn(self.full.0, self.full.1, |x, y| {
+            let Some((x, y)) = self.inside(x, y) else { return [f32::NAN; 4] };
+            let m = f.get(x, y);
+            if !m.ok {
+                return [f32::NAN; 4];
+            }
+            [m.i as f32, m.x, m.y, m.s.atan2(m.c)]
+        })
     }
 }
 
@@ -695,127 +634,6 @@ fn rewindow(prev: &PrevState, to: (usize, usize), pyr: &[FrameGuides]) -> PrevSt
         })
         .collect();
     PrevState { origin: to, nnf0, ext_pos, flow, masks }
-}
-
-/// Writes voted colors into the rgb lanes of `T^rgb` (`cur`) or `T^prev` (`!cur`).
-fn write_lanes(tgt: &mut TargetLevel, rgb: &[Rgb], cur: bool) {
-    let (w, stride) = (tgt.w, tgt.stride);
-    let pad = target::TPAD;
-    let arr = if cur { &mut tgt.cur } else { &mut tgt.prev };
-    arr.par_chunks_mut(stride).enumerate().for_each(|(py, row)| {
-        if py < pad || py >= pad + rgb.len() / w {
-            return;
-        }
-        let y = py - pad;
-        for x in 0..w {
-            let c = rgb[y * w + x];
-            let px = &mut row[x + pad];
-            // Quantization units of the color lanes: 0..=255.
-            px[0] = c[0] * 255.0;
-            px[1] = c[1] * 255.0;
-            px[2] = c[2] * 255.0;
-        }
-    });
-}
-
-/// Makes every inherited match (up-scaled, shifted in time, carried over) usable: frame
-/// indices and centers clamped into the valid margin (centers may have drifted out through
-/// up-scaling or the time shift; θ is kept, as the paper keeps it through UPSCALENNF and
-/// SHIFTNNF), and a match whose center is not a valid center of its target pixel's segment
-/// (border or interior) is dropped, as the search would never have chosen it. Matches of
-/// inactive pixels are dropped too.
-fn sanitize(ctx: &Ctx, nnf: &mut Nnf) {
-    let src = ctx.src;
-    let (xmax, ymax) = ((src.w - 1 - MARGIN) as f32, (src.h - 1 - MARGIN) as f32);
-    let last = (src.frames - 1) as u16;
-    nnf.data.par_iter_mut().enumerate().for_each(|(q, m)| {
-        if ctx.tgt.info[q].flags & source::VALID == 0 {
-            *m = Match::NONE;
-            return;
-        }
-        if m.ok {
-            m.x = m.x.clamp(MARGIN as f32, xmax);
-            m.y = m.y.clamp(MARGIN as f32, ymax);
-            m.i = m.i.min(last);
-            m.err = f32::INFINITY;
-            if ctx.check(ctx.wanted_segment(q), m.i as usize, m.x, m.y).is_none() {
-                *m = Match::NONE;
-            }
-        }
-    });
-}
-
-/// Gives every active pixel without a match one: the first of its four neighbours' matches,
-/// moved by the one-pixel offset (rotated), that is a valid center of its segment — the
-/// propagation step of PatchMatch, which keeps the field coherent where a few inherited
-/// matches were dropped — or else a random one. Reads the field as it was before (the result
-/// does not depend on the order of the pixels).
-fn repair(ctx: &Ctx, nnf: &mut Nnf) {
-    let (w, h) = (nnf.w, nnf.h);
-    if !nnf.data.iter().enumerate().any(|(q, m)| !m.ok && ctx.tgt.info[q].flags & source::VALID != 0) {
-        return;
-    }
-    let before = nnf.data.clone();
-    nnf.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-        for (x, m) in row.iter_mut().enumerate() {
-            let q = y * w + x;
-            if m.ok || ctx.tgt.info[q].flags & source::VALID == 0 {
-                continue;
-            }
-            let seg = ctx.wanted_segment(q);
-            let from = [(-1isize, 0isize), (1, 0), (0, -1), (0, 1)];
-            let propagated = from.iter().find_map(|&(dx, dy)| {
-                let (nx, ny) = (x as isize + dx, y as isize + dy);
-                if nx < 0 || ny < 0 || nx >= w as isize || ny >= h as isize {
-                    return None;
-                }
-                let n = before[ny as usize * w + nx as usize];
-                if !n.ok {
-                    return None;
-                }
-                // One step from the neighbour to q is M·(−dx, −dy) in the source.
-                let (ox, oy) = n.rotate(-dx as f32, -dy as f32);
-                let (cx, cy) = (n.x + ox, n.y + oy);
-                ctx.check(seg, n.i as usize, cx, cy).map(|_| Match { x: cx, y: cy, err: f32::INFINITY, ..n })
-            });
-            *m = propagated.unwrap_or_else(|| {
-                let mut rng = SplitMix64::keyed(&[ctx.keys[0], ctx.keys[1], ctx.keys[2], 0x5eed, q as u64]);
-                ctx.random_match(q, &mut rng)
-            });
-        }
-    });
-}
-
-/// MERGENNF: keeps, per pixel, whichever of `up` and `prev` has the smaller patch error —
-/// the up-scaled match `up` only when its error is below 1/κ of the carried match's
-/// (`kappa` = κ, 1 = the paper's comparison at face value).
-///
-/// The finest level merges with the coherence factor κ of the random search
-/// ([`ParamsBuilder::coherence`]): it is only voted, so the merge is the one choice made
-/// there, and the up-scaled challenger gets the same handicap as a random candidate. The
-/// coarse levels' estimate is a blur, which a flat, pale exemplar patch fits better than
-/// carried texture; compared at face value, a fifth of the carried matches were replaced
-/// every frame, each by a paler one (measured on green-wash, long target: mean exemplar
-/// luminance of the replacement +0.01), and over 150 frames the paint paled and lost its rim.
-fn merge(ctx: &Ctx, up: &mut Nnf, prev: &Nnf, kappa: f32) {
-    let w = up.w;
-    up.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-        for (x, m) in row.iter_mut().enumerate() {
-            let q = y * w + x;
-            let pm = &prev.data[q];
-            if !pm.ok {
-                continue;
-            }
-            let win = ctx.window(q);
-            let eu = ctx.error_in(&win, m);
-            let ep = ctx.error_in(&win, pm);
-            if ep < kappa * eu {
-                *m = Match { err: ep, ..*pm };
-            } else {
-                m.err = eu;
-            }
-        }
-    });
 }
 
 #[cfg(test)]

@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::img::Plane;
+use crate::rng::SplitMix64;
 use glam::Vec2;
 
 /// Analytic guides of a disc (center c, radius r) growing by `v` px per frame at frame k.

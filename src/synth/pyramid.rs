@@ -1,0 +1,383 @@
+//! The multi-scale driver of one frame (paper Appendix B, Algorithm 1; thesis §4.2): from the
+//! coarsest pyramid level to the finest, [`level`] builds the target's level, votes the
+//! temporal guide `T^prev` from the down-scaled shifted field ([`temporal_guide`]), initializes
+//! the field ([`initial_field`]: a random field and a guide-only pass on the first frame,
+//! UPSCALENNF and MERGENNF after) and runs the EM iterations ([`optimize`]: occurrence map,
+//! PatchMatch, vote). The finest level is only voted unless
+//! [`ParamsBuilder::optimize_finest`](super::ParamsBuilder::optimize_finest) is set; its vote
+//! is the output.
+
+use super::nnf::{Match, Nnf};
+use super::params::{PATCH, Params};
+use super::patchmatch::{self, Ctx};
+use super::source::{self, MARGIN, SourceLevel, SourcePyramid};
+use super::target::{self, TargetLevel};
+use super::{StageTimes, occurrence, shift, timed, vote};
+use crate::guide::FrameGuides;
+use crate::img::{Plane, Rgb};
+use crate::rng::SplitMix64;
+use rayon::prelude::*;
+use std::time::{Duration, Instant};
+
+/// What one frame's pyramid works from.
+pub(crate) struct FrameInputs<'a> {
+    /// The exemplar's pyramid.
+    pub src: &'a SourcePyramid,
+    /// The target's guides per level, finest first (cropped to the working window).
+    pub pyr: &'a [FrameGuides],
+    /// The parameters of this frame (the first frame's differ, see `Synthesizer::step`).
+    pub params: &'a Params,
+    /// The frame's index (a key of its random streams).
+    pub frame: usize,
+    /// The previous frame's field shifted in time (SHIFTNNF) at full resolution, and the
+    /// previous frame's masks per level; `None` on the first frame or when nothing is carried.
+    pub prev: Option<(&'a Nnf, &'a [Vec<bool>])>,
+    /// Also compute the occurrence view of the debug output.
+    pub debug: bool,
+}
+
+/// What one frame's pyramid produced.
+pub(crate) struct FrameOutcome {
+    /// The final field at the finest level.
+    pub field: Nnf,
+    /// The output's colors over the working window (row-major).
+    pub rgb: Vec<Rgb>,
+    /// The target's masks per level (carried to the next frame for m(q)).
+    pub masks: Vec<Vec<bool>>,
+    /// Time per level, coarsest first.
+    pub level_times: Vec<Duration>,
+    /// Patch-error evaluations.
+    pub evaluations: u64,
+    /// The energy at every PatchMatch sweep, `(level, E)`.
+    pub energy: Vec<(usize, f64)>,
+    /// Ω* of the finest optimized level, summed over frames (debug only).
+    pub omega: Option<Plane<f32>>,
+}
+
+/// Runs the pyramid of one frame, coarsest level first.
+pub(crate) fn run(f: &FrameInputs, st: &mut StageTimes) -> FrameOutcome {
+    let levels = f.pyr.len();
+    let mut out = FrameOutcome {
+        field: Nnf::new(0, 0),
+        rgb: Vec::new(),
+        masks: vec![Vec::new(); levels],
+        level_times: Vec::with_capacity(levels),
+        evaluations: 0,
+        energy: Vec::new(),
+        omega: None,
+    };
+    let mut coarse: Option<Nnf> = None;
+    for l in (0..levels).rev() {
+        let t0 = Instant::now();
+        coarse = Some(level(f, l, coarse.take(), st, &mut out));
+        out.level_times.push(t0.elapsed());
+    }
+    let (w, h) = f.pyr[0].mask.size();
+    out.field = coarse.unwrap_or_else(|| Nnf::new(w, h));
+    out
+}
+
+/// One pyramid level `l`: the target level, the temporal guide, the initial field (from the
+/// coarser level's field `coarse`, or none at the coarsest), the EM iterations, and at the
+/// finest level the output's vote. Returns the level's field.
+fn level(f: &FrameInputs, l: usize, coarse: Option<Nnf>, st: &mut StageTimes, out: &mut FrameOutcome) -> Nnf {
+    let (src, p) = (f.src, f.params);
+    let levels = f.pyr.len();
+    let sl = &src.levels[l];
+    let gl = &f.pyr[l];
+    let ext_cap = p.ext_clamp.then_some(src.ext_max);
+    let mut tgt = timed(&mut st.target, || {
+        TargetLevel::new(gl, &src.quant, src.border_width, ext_cap, sl.ext_falloff, src.paper)
+    });
+    out.masks[l] = shift::mask_flags(&tgt);
+    let prev_down = temporal_guide(f, l, &mut tgt, st);
+    let lv = Level {
+        src: sl,
+        params: p,
+        keys: [p.seed, f.frame as u64, l as u64],
+        from_coarsest: levels - 1 - l,
+        finest_vote_only: l == 0 && levels > 1 && !p.optimize_finest,
+        paper: src.paper,
+        size: gl.mask.size(),
+    };
+    // The occurrence map's buffers, kept through the level's iterations.
+    let mut occ = occurrence::Occurrence::new();
+    let mut field = initial_field(&lv, &mut tgt, coarse, prev_down, &mut occ, st, out);
+    if !lv.finest_vote_only {
+        optimize(&lv, &mut tgt, &mut field, &mut occ, st, out, l);
+        if f.debug {
+            let counts = occurrence::counts(sl, &field, &tgt, p.occ_radius);
+            let norm = ((PATCH * PATCH) * (2 * p.occ_radius + 1)) as f32;
+            out.omega = Some(Plane::from_fn(sl.w, sl.h, |x, y| {
+                (0..sl.frames).map(|i| counts[sl.index(i, x, y)] as f32).sum::<f32>() / norm
+            }));
+        }
+    }
+    if l == 0 {
+        // The output: bicubic sampling keeps rotated patches sharper than bilinear.
+        out.rgb = timed(&mut st.vote, || {
+            if p.keep_grain {
+                vote::vote_grain(sl, &field, src.paper, p.vote_sigma)
+            } else {
+                vote::vote_with(sl, &field, src.paper, p.vote_sigma, true)
+            }
+        });
+    }
+    field
+}
+
+/// The settings of one level's search.
+struct Level<'a> {
+    src: &'a SourceLevel,
+    params: &'a Params,
+    /// Seed, frame and level: the first three keys of the level's random streams.
+    keys: [u64; 3],
+    /// The level's index counted from the coarsest (for the per-level iteration lists).
+    from_coarsest: usize,
+    /// The finest level, only voted (and merged).
+    finest_vote_only: bool,
+    paper: Rgb,
+    /// The level's size, pixels.
+    size: (usize, usize),
+}
+
+impl Level<'_> {
+    /// The random-stream keys of iteration `it`.
+    fn keys(&self, it: u64) -> [u64; 4] {
+        [self.keys[0], self.keys[1], self.keys[2], it]
+    }
+
+    /// The estimate the search matches against, voted from `field`.
+    fn estimate(&self, field: &Nnf, st: &mut StageTimes) -> Vec<Rgb> {
+        timed(&mut st.vote, || vote::vote(self.src, field, self.paper, self.params.estimate_sigma))
+    }
+}
+
+/// The temporal guide `T^prev` and m(q) of level `l`, voted from the shifted field down-scaled
+/// to the level (DOWNSCALENNF); returns that field (it also initializes the search), `None`
+/// when nothing is carried.
+fn temporal_guide(f: &FrameInputs, l: usize, tgt: &mut TargetLevel, st: &mut StageTimes) -> Option<Nnf> {
+    let (shifted, prev_masks) = f.prev?;
+    let (src, p) = (f.src, f.params);
+    let sl = &src.levels[l];
+    let (lw, lh) = f.pyr[l].mask.size();
+    let sd = timed(&mut st.shift, || shifted.downscale(l, lw, lh));
+    let voted = timed(&mut st.vote, || vote::vote(sl, &sd, src.paper, p.estimate_sigma));
+    write_lanes(tgt, &voted, false);
+    timed(&mut st.shift, || {
+        shift::fill_modulation(tgt, sl, &sd, &prev_masks[l], src.border_width, p.prev_bounds, p.w_prev)
+    });
+    Some(sd)
+}
+
+/// The field a level starts from. At the coarsest level: the shifted field (or a random one
+/// on the first frame, followed by one guide-only PatchMatch pass, thesis §4.2). Below it: the
+/// coarser field up-scaled (UPSCALENNF), merged with the shifted one (MERGENNF) where there
+/// is one. Inherited matches are sanitized and holes repaired.
+fn initial_field(
+    lv: &Level,
+    tgt: &mut TargetLevel,
+    coarse: Option<Nnf>,
+    prev_down: Option<Nnf>,
+    occ: &mut occurrence::Occurrence,
+    st: &mut StageTimes,
+    out: &mut FrameOutcome,
+) -> Nnf {
+    let (sl, p) = (lv.src, lv.params);
+    let (lw, lh) = lv.size;
+    let Some(coarse) = coarse else {
+        let had_prev = prev_down.is_some();
+        let mut f = prev_down.unwrap_or_else(|| Nnf::new(lw, lh));
+        let ctx = Ctx::new(sl, tgt, None, 1.0, p, lv.keys(u64::MAX));
+        sanitize(&ctx, &mut f);
+        repair(&ctx, &mut f);
+        if !had_prev {
+            // First frame: random field, then one guide-only PatchMatch pass (thesis §4.2).
+            let ctx = Ctx { w_col: 0.0, ..ctx };
+            out.evaluations += timed(&mut st.patchmatch, || patchmatch::sweep(&ctx, &mut f, 0)).0.evaluations;
+        }
+        return f;
+    };
+    let mut up = coarse.upscale(lw, lh);
+    let init = Ctx::new(sl, tgt, None, 1.0, p, lv.keys(u64::MAX));
+    sanitize(&init, &mut up);
+    repair(&init, &mut up);
+    if let Some(mut pd) = prev_down {
+        sanitize(&init, &mut pd);
+        // MERGENNF: per pixel, the field with the smaller error (against the estimate voted
+        // from the up-scaled field).
+        let voted = lv.estimate(&up, st);
+        write_lanes(tgt, &voted, true);
+        let omega = if lv.finest_vote_only {
+            None
+        } else {
+            timed(&mut st.occurrence, || occ.update(sl, &up, tgt, p.occ_radius, p.lambda))
+        };
+        let ctx = Ctx::new(sl, tgt, omega, p.w_color, p, lv.keys(0));
+        let kappa = if lv.finest_vote_only { p.coherence } else { 1.0 };
+        timed(&mut st.init, || merge(&ctx, &mut up, &pd, kappa));
+        out.evaluations += 2 * tgt.active.len() as u64;
+    }
+    up
+}
+
+/// The EM iterations of a level: per iteration, PatchMatch sweeps against the current
+/// estimate (the occurrence map updated before each) and a new estimate voted from the field.
+fn optimize(
+    lv: &Level,
+    tgt: &mut TargetLevel,
+    field: &mut Nnf,
+    occ: &mut occurrence::Occurrence,
+    st: &mut StageTimes,
+    out: &mut FrameOutcome,
+    l: usize,
+) {
+    let (sl, p) = (lv.src, lv.params);
+    let voted = lv.estimate(field, st);
+    write_lanes(tgt, &voted, true);
+    for opt in 0..p.opt_iters_at(lv.from_coarsest) {
+        for it in 0..p.pm_iters_at(lv.from_coarsest) {
+            let omega = timed(&mut st.occurrence, || occ.update(sl, field, tgt, p.occ_radius, p.lambda));
+            let ctx = Ctx::new(sl, tgt, omega, p.w_color, p, lv.keys(opt as u64));
+            let (stats, e) = timed(&mut st.patchmatch, || patchmatch::sweep(&ctx, field, it));
+            out.energy.push((l, e));
+            out.evaluations += stats.evaluations;
+        }
+        out.energy.push((l, mean_err(field)));
+        let voted = lv.estimate(field, st);
+        write_lanes(tgt, &voted, true);
+    }
+}
+
+/// Mean patch error of the matched pixels of `nnf`.
+fn mean_err(nnf: &Nnf) -> f64 {
+    let (mut s, mut n) = (0.0f64, 0usize);
+    for m in &nnf.data {
+        if m.ok && m.err.is_finite() {
+            s += m.err as f64;
+            n += 1;
+        }
+    }
+    if n > 0 { s / n as f64 } else { 0.0 }
+}
+
+/// Writes voted colors into the rgb lanes of `T^rgb` (`cur`) or `T^prev` (`!cur`).
+fn write_lanes(tgt: &mut TargetLevel, rgb: &[Rgb], cur: bool) {
+    let (w, stride) = (tgt.w, tgt.stride);
+    let pad = target::TPAD;
+    let arr = if cur { &mut tgt.cur } else { &mut tgt.prev };
+    arr.par_chunks_mut(stride).enumerate().for_each(|(py, row)| {
+        if py < pad || py >= pad + rgb.len() / w {
+            return;
+        }
+        let y = py - pad;
+        for x in 0..w {
+            let c = rgb[y * w + x];
+            let px = &mut row[x + pad];
+            // Quantization units of the color lanes: 0..=255.
+            px[0] = c[0] * 255.0;
+            px[1] = c[1] * 255.0;
+            px[2] = c[2] * 255.0;
+        }
+    });
+}
+
+/// Makes every inherited match (up-scaled, shifted in time, carried over) usable: frame
+/// indices and centers clamped into the valid margin (centers may have drifted out through
+/// up-scaling or the time shift; θ is kept, as the paper keeps it through UPSCALENNF and
+/// SHIFTNNF), and a match whose center is not a valid center of its target pixel's segment
+/// (border or interior) is dropped, as the search would never have chosen it. Matches of
+/// inactive pixels are dropped too.
+fn sanitize(ctx: &Ctx, nnf: &mut Nnf) {
+    let src = ctx.src;
+    let (xmax, ymax) = ((src.w - 1 - MARGIN) as f32, (src.h - 1 - MARGIN) as f32);
+    let last = (src.frames - 1) as u16;
+    nnf.data.par_iter_mut().enumerate().for_each(|(q, m)| {
+        if ctx.tgt.info[q].flags & source::VALID == 0 {
+            *m = Match::NONE;
+            return;
+        }
+        if m.ok {
+            m.x = m.x.clamp(MARGIN as f32, xmax);
+            m.y = m.y.clamp(MARGIN as f32, ymax);
+            m.i = m.i.min(last);
+            m.err = f32::INFINITY;
+            if ctx.check(ctx.wanted_segment(q), m.i as usize, m.x, m.y).is_none() {
+                *m = Match::NONE;
+            }
+        }
+    });
+}
+
+/// Gives every active pixel without a match one: the first of its four neighbours' matches,
+/// moved by the one-pixel offset (rotated), that is a valid center of its segment — the
+/// propagation step of PatchMatch, which keeps the field coherent where a few inherited
+/// matches were dropped — or else a random one. Reads the field as it was before (the result
+/// does not depend on the order of the pixels).
+fn repair(ctx: &Ctx, nnf: &mut Nnf) {
+    let (w, h) = (nnf.w, nnf.h);
+    if !nnf.data.iter().enumerate().any(|(q, m)| !m.ok && ctx.tgt.info[q].flags & source::VALID != 0) {
+        return;
+    }
+    let before = nnf.data.clone();
+    nnf.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        for (x, m) in row.iter_mut().enumerate() {
+            let q = y * w + x;
+            if m.ok || ctx.tgt.info[q].flags & source::VALID == 0 {
+                continue;
+            }
+            let seg = ctx.wanted_segment(q);
+            let from = [(-1isize, 0isize), (1, 0), (0, -1), (0, 1)];
+            let propagated = from.iter().find_map(|&(dx, dy)| {
+                let (nx, ny) = (x as isize + dx, y as isize + dy);
+                if nx < 0 || ny < 0 || nx >= w as isize || ny >= h as isize {
+                    return None;
+                }
+                let n = before[ny as usize * w + nx as usize];
+                if !n.ok {
+                    return None;
+                }
+                // One step from the neighbour to q is M·(−dx, −dy) in the source.
+                let (ox, oy) = n.rotate(-dx as f32, -dy as f32);
+                let (cx, cy) = (n.x + ox, n.y + oy);
+                ctx.check(seg, n.i as usize, cx, cy).map(|_| Match { x: cx, y: cy, err: f32::INFINITY, ..n })
+            });
+            *m = propagated.unwrap_or_else(|| {
+                let mut rng = SplitMix64::keyed(&[ctx.keys[0], ctx.keys[1], ctx.keys[2], 0x5eed, q as u64]);
+                ctx.random_match(q, &mut rng)
+            });
+        }
+    });
+}
+
+/// MERGENNF: keeps, per pixel, whichever of `up` and `prev` has the smaller patch error —
+/// the up-scaled match `up` only when its error is below 1/κ of the carried match's
+/// (`kappa` = κ, 1 = the paper's comparison at face value).
+///
+/// The finest level merges with the coherence factor κ of the random search
+/// ([`ParamsBuilder::coherence`]): it is only voted, so the merge is the one choice made
+/// there, and the up-scaled challenger gets the same handicap as a random candidate. The
+/// coarse levels' estimate is a blur, which a flat, pale exemplar patch fits better than
+/// carried texture; compared at face value, a fifth of the carried matches were replaced
+/// every frame, each by a paler one (measured on green-wash, long target: mean exemplar
+/// luminance of the replacement +0.01), and over 150 frames the paint paled and lost its rim.
+fn merge(ctx: &Ctx, up: &mut Nnf, prev: &Nnf, kappa: f32) {
+    let w = up.w;
+    up.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        for (x, m) in row.iter_mut().enumerate() {
+            let q = y * w + x;
+            let pm = &prev.data[q];
+            if !pm.ok {
+                continue;
+            }
+            let win = ctx.window(q);
+            let eu = ctx.error_in(&win, m);
+            let ep = ctx.error_in(&win, pm);
+            if ep < kappa * eu {
+                *m = Match { err: ep, ..*pm };
+            } else {
+                m.err = eu;
+            }
+        }
+    });
+}
