@@ -1,59 +1,88 @@
-//! Progress bars on a terminal (nothing under `--quiet` or when stderr is not a terminal).
+//! Progress bars on a terminal, and Ctrl-C: one [`Bars`] for every command.
 
 use fluidymation::Progress;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::collections::HashMap;
 use std::io::IsTerminal;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
 
-/// One bar, or nothing.
+/// Progress bars on a terminal (none under `--quiet` or when stderr is not a terminal): one
+/// per stage the library reports (a layer, a file of a batch, a run of the quality suite) and
+/// the frames as a total with ETA. A Ctrl-C ([`handle_interrupts`]) makes the reports ask the
+/// work to stop.
 pub struct Bars {
-    bar: Option<ProgressBar>,
+    multi: Option<MultiProgress>,
+    bars: Mutex<HashMap<String, ProgressBar>>,
+    interrupted: &'static AtomicBool,
 }
 
 impl Bars {
-    /// A bar of `total` steps.
-    pub fn new(quiet: bool, total: u64) -> Bars {
-        if quiet || !std::io::stderr().is_terminal() {
-            return Bars { bar: None };
-        }
-        let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
-        bar.set_style(
-            ProgressStyle::with_template("{bar:40.cyan/blue} {pos}/{len} {msg} [{elapsed_precise} < {eta}]")
-                .unwrap_or_else(|_| ProgressStyle::default_bar()),
-        );
-        Bars { bar: Some(bar) }
-    }
-
-    /// Advances by `n`.
-    pub fn inc(&self, n: u64) {
-        if let Some(b) = &self.bar {
-            b.inc(n);
+    /// Bars on stderr unless `quiet` or stderr is not a terminal; `interrupted` stops the
+    /// work.
+    pub fn new(quiet: bool) -> Bars {
+        let show = !quiet && std::io::stderr().is_terminal();
+        Bars {
+            multi: show.then(|| MultiProgress::with_draw_target(ProgressDrawTarget::stderr())),
+            bars: Mutex::new(HashMap::new()),
+            interrupted: &INTERRUPTED,
         }
     }
 
-    /// Sets the message after the bar.
-    pub fn set_message(&self, m: String) {
-        if let Some(b) = &self.bar {
-            b.set_message(m);
-        }
+    /// True once Ctrl-C was pressed ([`handle_interrupts`]).
+    pub fn interrupted(&self) -> bool {
+        self.interrupted.load(Ordering::SeqCst)
     }
 
-    /// Removes the bar.
-    pub fn finish(&self) {
-        if let Some(b) = &self.bar {
-            b.finish_and_clear();
+    /// Removes every bar from the terminal. Bars that are only dropped draw themselves once
+    /// more (indicatif's default), which left a stale bar above the summary or the error.
+    pub fn clear(&self) {
+        if let Ok(bars) = self.bars.lock() {
+            for bar in bars.values() {
+                bar.finish_and_clear();
+            }
+        }
+        if let Some(m) = &self.multi {
+            let _ = m.clear();
         }
     }
 }
 
-/// The library's progress as one bar: its length and position follow the reports, its
-/// message names the stage.
 impl Progress for Bars {
     fn update(&self, stage: &str, done: usize, total: usize) -> bool {
-        if let Some(b) = &self.bar {
-            b.set_length(total as u64);
-            b.set_position(done as u64);
-            b.set_message(stage.to_string());
+        if let Some(multi) = &self.multi
+            && let Ok(mut bars) = self.bars.lock()
+        {
+            let bar = bars.entry(stage.to_string()).or_insert_with(|| {
+                let (template, bar) = if stage == "frames" {
+                    (
+                        "{prefix:>16.bold} {bar:30.green/blue} {pos}/{len} frames  {elapsed_precise} < {eta_precise}",
+                        ProgressBar::new(total as u64),
+                    )
+                } else {
+                    ("{prefix:>16} {bar:30.cyan/blue} {pos}/{len}", ProgressBar::new(total as u64))
+                };
+                let bar = multi.add(bar);
+                bar.set_style(ProgressStyle::with_template(template).unwrap_or_else(|_| ProgressStyle::default_bar()));
+                let name: String = stage.chars().take(16).collect();
+                bar.set_prefix(if stage == "frames" { "total".to_string() } else { name });
+                bar
+            });
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
         }
-        true
+        !self.interrupted.load(Ordering::SeqCst)
     }
+}
+
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// Installs the Ctrl-C handler: the first Ctrl-C stops after the frame in progress
+/// (resumable); a second one quits at once.
+pub fn handle_interrupts() {
+    let _ = ctrlc::set_handler(|| {
+        if INTERRUPTED.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+    });
 }

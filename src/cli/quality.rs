@@ -89,9 +89,9 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
         ..defaults
     };
     options.validate()?;
-    let bars = Bars::new(ctx.quiet, 0);
+    let bars = Bars::new(ctx.quiet);
     let report = quality::run(&options, &bars);
-    bars.finish();
+    bars.clear();
     let report = report.context("the quality suite failed")?;
     let table = report.to_string();
     println!("{table}");

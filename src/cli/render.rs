@@ -3,17 +3,15 @@
 
 use super::Ctx;
 use super::params::{SynthFlags, parse_frames, set_threads, warn_if_clipped};
+pub use super::progress::{Bars, handle_interrupts};
 use anyhow::{Context, Result, bail};
 use fluidymation::anim::{self, Animation, LoadOptions};
 use fluidymation::composite::{Recolor, StrokeMode};
 use fluidymation::render::{self, RenderOptions, RenderSummary};
 use fluidymation::{Error, Progress};
-use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
-use std::collections::{BTreeMap, HashMap};
-use std::io::IsTerminal;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicBool, Ordering};
 
 /// What to render and how: the options `render`, `plan`, `render-layer` and `composite`
 /// share.
@@ -385,67 +383,6 @@ fn check_svg_frames(inputs: &[PathBuf]) -> Result<()> {
     Ok(())
 }
 
-/// Progress bars: one per layer (or per file in a batch) and a total with ETA, on a
-/// terminal only.
-pub struct Bars {
-    multi: Option<MultiProgress>,
-    bars: Mutex<HashMap<String, ProgressBar>>,
-    interrupted: &'static AtomicBool,
-}
-
-impl Bars {
-    /// Bars on stderr unless `quiet` or stderr is not a terminal; `interrupted` stops the
-    /// work.
-    pub fn new(quiet: bool) -> Bars {
-        let show = !quiet && std::io::stderr().is_terminal();
-        Bars {
-            multi: show.then(|| MultiProgress::with_draw_target(ProgressDrawTarget::stderr())),
-            bars: Mutex::new(HashMap::new()),
-            interrupted: &INTERRUPTED,
-        }
-    }
-
-    /// Removes every bar from the terminal. Bars that are only dropped draw themselves once
-    /// more (indicatif's default), which left a stale bar above the summary or the error.
-    pub fn clear(&self) {
-        if let Ok(bars) = self.bars.lock() {
-            for bar in bars.values() {
-                bar.finish_and_clear();
-            }
-        }
-        if let Some(m) = &self.multi {
-            let _ = m.clear();
-        }
-    }
-}
-
-impl Progress for Bars {
-    fn update(&self, stage: &str, done: usize, total: usize) -> bool {
-        if let Some(multi) = &self.multi
-            && let Ok(mut bars) = self.bars.lock()
-        {
-            let bar = bars.entry(stage.to_string()).or_insert_with(|| {
-                let (template, bar) = if stage == "frames" {
-                    (
-                        "{prefix:>16.bold} {bar:30.green/blue} {pos}/{len} frames  {elapsed_precise} < {eta_precise}",
-                        ProgressBar::new(total as u64),
-                    )
-                } else {
-                    ("{prefix:>16} {bar:30.cyan/blue} {pos}/{len}", ProgressBar::new(total as u64))
-                };
-                let bar = multi.add(bar);
-                bar.set_style(ProgressStyle::with_template(template).unwrap_or_else(|_| ProgressStyle::default_bar()));
-                let name: String = stage.chars().take(16).collect();
-                bar.set_prefix(if stage == "frames" { "total".to_string() } else { name });
-                bar
-            });
-            bar.set_length(total as u64);
-            bar.set_position(done as u64);
-        }
-        !self.interrupted.load(Ordering::SeqCst)
-    }
-}
-
 /// The progress of one file of a batch: its frames as one bar named after the file, and
 /// the sum over the files as the total.
 struct FileProgress<'a> {
@@ -458,7 +395,7 @@ struct FileProgress<'a> {
 impl Progress for FileProgress<'_> {
     fn update(&self, stage: &str, done: usize, total: usize) -> bool {
         if stage != "frames" {
-            return !self.bars.interrupted.load(Ordering::SeqCst);
+            return !self.bars.interrupted();
         }
         self.bars.update(&self.name, done, total);
         let (sum, all) = {
@@ -468,18 +405,6 @@ impl Progress for FileProgress<'_> {
         };
         self.bars.update("frames", sum, all)
     }
-}
-
-static INTERRUPTED: AtomicBool = AtomicBool::new(false);
-
-/// Installs the Ctrl-C handler: the first Ctrl-C stops after the frame in progress
-/// (resumable); a second one quits at once.
-pub fn handle_interrupts() {
-    let _ = ctrlc::set_handler(|| {
-        if INTERRUPTED.swap(true, Ordering::SeqCst) {
-            std::process::exit(130);
-        }
-    });
 }
 
 /// Runs `render`.

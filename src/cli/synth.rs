@@ -4,6 +4,7 @@ use super::Ctx;
 use super::params::{SynthFlags, parse_frames, set_threads, warn_if_clipped};
 use super::progress::Bars;
 use anyhow::{Context, Result, bail};
+use fluidymation::Progress;
 use fluidymation::anim::{self, LoadOptions};
 use fluidymation::guide::GuideStream;
 use fluidymation::img::{self, Plane};
@@ -51,7 +52,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("could not create the output directory '{}'", dir.display()))?;
     }
-    let bars = Bars::new(ctx.quiet, anim.frames as u64);
+    let bars = Bars::new(ctx.quiet);
     // σ and b fitted to the target's thickness.
     let params = if params.fit_thin() {
         let b = params.exemplar_border_width(&exemplar);
@@ -78,8 +79,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
         }
         let g = g.with_context(|| format!("could not compute the guides of frame {}", k + 1))?;
         let out = synth.step(&g).with_context(|| format!("synthesis failed at frame {}", k + 1))?;
-        bars.set_message(format!("frame {}", k + 1));
-        bars.inc(1);
+        bars.update("frames", k + 1, range.end);
         if k < range.start {
             continue;
         }
@@ -95,7 +95,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
         }
         written += 1;
     }
-    bars.finish();
+    bars.clear();
     if written == 0 {
         bail!("no frame was synthesized");
     }
