@@ -115,7 +115,23 @@ pub enum Error {
         /// The layers that exist.
         available: Vec<String>,
     },
-    /// A file the program wrote earlier (a checkpoint, a cache) cannot be used.
+    /// Something a command works from was never made: no interrupted render to resume, a
+    /// layer that its render-layer job has not painted yet.
+    Missing {
+        /// Where it should be.
+        path: PathBuf,
+        /// What is missing and what to do.
+        what: String,
+    },
+    /// A file the program wrote earlier was made with other options than this run's (another
+    /// input, range, style or parameters): sound, but not this run's.
+    Stale {
+        /// The file.
+        path: PathBuf,
+        /// What differs and what to do.
+        message: String,
+    },
+    /// A file the program wrote earlier (a checkpoint, a cache) is damaged or fails its checks.
     Corrupt {
         /// The file.
         path: PathBuf,
@@ -212,6 +228,8 @@ impl fmt::Display for Error {
             Error::UnknownLayer { name, available } => {
                 write!(f, "no layer named '{}'; layers: {}", name, list(available))
             }
+            Error::Missing { path, what } => write!(f, "'{}': {}", path.display(), what),
+            Error::Stale { path, message } => write!(f, "'{}': {}", path.display(), message),
             Error::Corrupt { path, message } => write!(f, "'{}': {}", path.display(), message),
             Error::Cancelled => write!(f, "cancelled"),
         }

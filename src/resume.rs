@@ -194,12 +194,13 @@ impl Journal {
 
     /// Opens the state of an interrupted render in `out_dir` made with the same options
     /// (`fingerprint`) over `total` frames, and returns it with the number of frames done.
-    /// Fails when there is none ([`Error::Empty`]), when it was made with other options, or
-    /// when any of it fails its checks ([`Error::Corrupt`], saying what to do as `remedy` says).
+    /// Fails when there is none ([`Error::Missing`]), when it was made with other options
+    /// ([`Error::Stale`]), or when any of it fails its checks ([`Error::Corrupt`]); the last two
+    /// say what to do as `remedy` says.
     pub fn open(out_dir: &Path, fingerprint: u64, total: usize, remedy: Remedy) -> Result<(Journal, usize)> {
         let dir = out_dir.join(STATE_DIR);
         let path = dir.join("progress.toml");
-        let text = std::fs::read(&path).map_err(|e| Error::Empty {
+        let text = std::fs::read(&path).map_err(|e| Error::Missing {
             path: out_dir.to_path_buf(),
             what: format!(
                 "there is no interrupted render to resume here ({}: {}); render without --resume",
@@ -239,7 +240,7 @@ impl Journal {
                                       frame"
                 }
             };
-            return Err(Error::Corrupt { path: path.clone(), message: message.into() });
+            return Err(Error::Stale { path: path.clone(), message: message.into() });
         }
         let done = num("done")?;
         if done > total as u64 {

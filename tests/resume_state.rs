@@ -135,6 +135,6 @@ fn a_state_of_another_render_is_refused() {
     let mut opts = case.options(true);
     opts.params = opts.params.to_builder().seed(99).build().unwrap();
     let e = render::render(&case.anim(), &opts, &NoProgress).unwrap_err();
-    assert!(matches!(e, Error::Corrupt { .. }), "{e}");
+    assert!(matches!(e, Error::Stale { .. }), "{e}");
     assert!(e.to_string().contains("resume with the same options"), "{e}");
 }

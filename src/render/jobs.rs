@@ -234,8 +234,8 @@ pub fn render_layer(
         Ok((journal, done)) => {
             verified(&journal, "painting the layer again from its first frame").then_some((journal, done))
         }
-        Err(Error::Empty { .. }) => None,
-        Err(e @ Error::Corrupt { .. }) => {
+        Err(Error::Missing { .. }) => None,
+        Err(e @ (Error::Corrupt { .. } | Error::Stale { .. })) => {
             log::warn!("layer {:02} '{}': {e}", r.index, r.name);
             None
         }
@@ -351,7 +351,7 @@ pub fn composite(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress
             let dir = output::layer_dir(&opts.out_dir, r);
             let path = dir.join(LAYER_MANIFEST);
             let manifest = read_manifest(&path).map_err(|e| match e {
-                Error::Io { .. } => Error::Empty {
+                Error::Io { .. } => Error::Missing {
                     path: dir.clone(),
                     what: format!(
                         "layer {:02} '{}' is not painted (completely): run its render-layer job first",
@@ -361,7 +361,7 @@ pub fn composite(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress
                 other => other,
             })?;
             if manifest.fingerprint != layer_fingerprint(anim, opts, input, region, style) {
-                return Err(Error::Corrupt {
+                return Err(Error::Stale {
                     path,
                     message: format!(
                         "layer {:02} '{}' was painted with other options than this composite's (input, frames, \
