@@ -22,7 +22,7 @@
 
 pub mod border;
 mod bundled;
-pub mod cache;
+pub(crate) mod cache;
 pub mod generate;
 pub mod import;
 mod search;

@@ -39,8 +39,7 @@ mod target;
 mod vote;
 
 pub use params::{HALF, PATCH, Params, ParamsBuilder};
-pub use patchmatch::Stats;
-pub use source::SourcePyramid;
+use source::SourcePyramid;
 
 use crate::error::{Error, Result};
 use crate::exemplar::Exemplar;

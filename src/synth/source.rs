@@ -502,11 +502,6 @@ impl SourcePyramid {
             size: frames[0].size(),
         }
     }
-
-    /// Number of levels.
-    pub fn levels(&self) -> usize {
-        self.levels.len()
-    }
 }
 
 /// The unit in which color differences are measured: the exemplar's mean local color variance,
