@@ -527,28 +527,24 @@ impl Placement {
         })
     }
 
+    /// `f(match)` of every full-frame pixel whose field `field` has a match there, else `none`.
+    fn map_field<T: Copy>(&self, field: &Nnf, none: T, f: impl Fn(&nnf::Match) -> T) -> Plane<T> {
+        Plane::from_fn(self.full.0, self.full.1, |x, y| match self.inside(x, y).map(|(x, y)| field.get(x, y)) {
+            Some(m) if m.ok => f(m),
+            _ => none,
+        })
+    }
+
     /// The field as colors ([`DebugViews::nnf`]).
     fn nnf_colors(&self, field: &Nnf, s0: &source::SourceLevel) -> Plane<Rgb> {
-        Plane::from_fn(self.full.0, self.full.1, |x, y| {
-            let Some((x, y)) = self.inside(x, y) else { return [0.0; 3] };
-            let m = field.get(x, y);
-            if !m.ok {
-                return [0.0; 3];
-            }
+        self.map_field(field, [0.0; 3], |m| {
             [m.x / s0.w as f32, m.y / s0.h as f32, m.i as f32 / (s0.frames - 1).max(1) as f32]
         })
     }
 
     /// The field itself per full-frame pixel ([`DebugViews::field`]).
-    fn raw(&self, f: &Nnf) -> Plane<[f32; 4]> {
-        Plane::from_fn(self.full.0, self.full.1, |x, y| {
-            let Some((x, y)) = self.inside(x, y) else { return [f32::NAN; 4] };
-            let m = f.get(x, y);
-            if !m.ok {
-                return [f32::NAN; 4];
-            }
-            [m.i as f32, m.x, m.y, m.s.atan2(m.c)]
-        })
+    fn raw(&self, field: &Nnf) -> Plane<[f32; 4]> {
+        self.map_field(field, [f32::NAN; 4], |m| [m.i as f32, m.x, m.y, m.s.atan2(m.c)])
     }
 }
 

@@ -94,7 +94,8 @@ fn level(f: &FrameInputs, l: usize, coarse: Option<Nnf>, st: &mut StageTimes, ou
     let lv = Level {
         src: sl,
         params: p,
-        keys: [p.seed, f.frame as u64, l as u64],
+        frame: f.frame,
+        level: l,
         from_coarsest: levels - 1 - l,
         finest_vote_only: l == 0 && levels > 1 && !p.optimize_finest,
         paper: src.paper,
@@ -104,7 +105,7 @@ fn level(f: &FrameInputs, l: usize, coarse: Option<Nnf>, st: &mut StageTimes, ou
     let mut occ = occurrence::Occurrence::new();
     let mut field = initial_field(&lv, &mut tgt, coarse, prev_down, &mut occ, st, out);
     if !lv.finest_vote_only {
-        optimize(&lv, &mut tgt, &mut field, &mut occ, st, out, l);
+        optimize(&lv, &mut tgt, &mut field, &mut occ, st, out);
         if f.debug {
             let counts = occurrence::counts(sl, &field, &tgt, p.occ_radius);
             let norm = ((PATCH * PATCH) * (2 * p.occ_radius + 1)) as f32;
@@ -130,8 +131,10 @@ fn level(f: &FrameInputs, l: usize, coarse: Option<Nnf>, st: &mut StageTimes, ou
 struct Level<'a> {
     src: &'a SourceLevel,
     params: &'a Params,
-    /// Seed, frame and level: the first three keys of the level's random streams.
-    keys: [u64; 3],
+    /// The frame's index.
+    frame: usize,
+    /// The level's index (0 = finest).
+    level: usize,
     /// The level's index counted from the coarsest (for the per-level iteration lists).
     from_coarsest: usize,
     /// The finest level, only voted (and merged).
@@ -144,7 +147,7 @@ struct Level<'a> {
 impl Level<'_> {
     /// The random-stream keys of iteration `it`.
     fn keys(&self, it: u64) -> [u64; 4] {
-        [self.keys[0], self.keys[1], self.keys[2], it]
+        [self.params.seed, self.frame as u64, self.level as u64, it]
     }
 
     /// The estimate the search matches against, voted from `field`.
@@ -230,8 +233,8 @@ fn optimize(
     occ: &mut occurrence::Occurrence,
     st: &mut StageTimes,
     out: &mut FrameOutcome,
-    l: usize,
 ) {
+    let l = lv.level;
     let (sl, p) = (lv.src, lv.params);
     let voted = lv.estimate(field, st);
     write_lanes(tgt, &voted, true);

@@ -551,8 +551,8 @@ pub(crate) fn color_variance(frames: &[Plane<Rgb>], guides: &[FrameGuides]) -> f
 pub(crate) const EXTENT_FALLOFF_MIN_SIDE: usize = 10 * super::params::PATCH;
 
 /// The factor of the extent lanes at depth `r = d/b` (distance from the edge over the border
-/// width) when they fade out in the interior: 1 in the border band (r ≤ 1), falling linearly
-/// to 0 at r = 2.
+/// width): 1 when they do not fade (`on` false, the level's [`SourceLevel::ext_falloff`]);
+/// else 1 in the border band (r ≤ 1), falling linearly to 0 at r = 2.
 ///
 /// The extents say how far the paint has travelled to a pixel. Near the edge that decides
 /// the rim (advancing, receding, settled); deep inside, it ties the target's interior to the
@@ -563,11 +563,10 @@ pub(crate) const EXTENT_FALLOFF_MIN_SIDE: usize = 10 * super::params::PATCH;
 /// 0.6 of the exemplar's at the same depths. Without the extents there, the interior is
 /// matched by texture, border channel and uniformity alone.
 #[inline]
-pub(crate) fn extent_falloff(r: f32) -> f32 {
-    (2.0 - r).clamp(0.0, 1.0)
+pub(crate) fn extent_falloff(on: bool, r: f32) -> f32 {
+    if on { (2.0 - r).clamp(0.0, 1.0) } else { 1.0 }
 }
 
-#[allow(clippy::too_many_arguments)]
 fn build_level(
     rgb: &[Plane<Rgb>],
     guides: &[FrameGuides],
@@ -593,7 +592,7 @@ fn build_level(
             let ep = g.ext_pos.get(x, y);
             let en = g.ext_neg.get(x, y);
             let idx = i * frame_len + offset;
-            let fade = if falloff { extent_falloff(dist / b) } else { 1.0 };
+            let fade = extent_falloff(falloff, dist / b);
             let v = [col[0], col[1], col[2], df, ep * fade, en * fade, 0.0, 0.0];
             feat[idx] = std::array::from_fn(|k| if k < 6 { qn.quantize(k, v[k]) } else { 0 });
             if !inside {

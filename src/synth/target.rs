@@ -53,7 +53,7 @@ impl TargetLevel {
                 let x = (px as isize - TPAD as isize).clamp(0, w as isize - 1) as usize;
                 let dist = g.dist.get(x, y);
                 let df = (dist / border_width).min(1.0);
-                let fade = if falloff { extent_falloff(dist / border_width) } else { 1.0 };
+                let fade = extent_falloff(falloff, dist / border_width);
                 let ep = g.ext_pos.get(x, y).min(cap) * fade;
                 let en = g.ext_neg.get(x, y).min(cap) * fade;
                 let v = [fill[0], fill[1], fill[2], df, ep, en, 0.0, 0.0];
