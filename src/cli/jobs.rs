@@ -4,7 +4,8 @@
 
 use super::Ctx;
 use super::params::set_threads;
-use super::render::{Bars, RenderArgs, check_args, check_layer_keys, file_options, handle_interrupts, load_input};
+use super::progress::{Bars, handle_interrupts};
+use super::render::{RenderArgs, check_args, check_layer_keys, file_options, load_input};
 use anyhow::{Context, Result, bail};
 use fluidymation::Error;
 use fluidymation::render;

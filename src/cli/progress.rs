@@ -14,24 +14,21 @@ use std::sync::atomic::{AtomicBool, Ordering};
 pub struct Bars {
     multi: Option<MultiProgress>,
     bars: Mutex<HashMap<String, ProgressBar>>,
-    interrupted: &'static AtomicBool,
 }
 
 impl Bars {
-    /// Bars on stderr unless `quiet` or stderr is not a terminal; `interrupted` stops the
-    /// work.
+    /// Bars on stderr unless `quiet` or stderr is not a terminal.
     pub fn new(quiet: bool) -> Bars {
         let show = !quiet && std::io::stderr().is_terminal();
         Bars {
             multi: show.then(|| MultiProgress::with_draw_target(ProgressDrawTarget::stderr())),
             bars: Mutex::new(HashMap::new()),
-            interrupted: &INTERRUPTED,
         }
     }
 
     /// True once Ctrl-C was pressed ([`handle_interrupts`]).
     pub fn interrupted(&self) -> bool {
-        self.interrupted.load(Ordering::SeqCst)
+        INTERRUPTED.load(Ordering::SeqCst)
     }
 
     /// Removes every bar from the terminal. Bars that are only dropped draw themselves once
@@ -71,7 +68,7 @@ impl Progress for Bars {
             bar.set_length(total as u64);
             bar.set_position(done as u64);
         }
-        !self.interrupted.load(Ordering::SeqCst)
+        !self.interrupted()
     }
 }
 

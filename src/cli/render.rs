@@ -3,7 +3,7 @@
 
 use super::Ctx;
 use super::params::{SynthFlags, parse_frames, set_threads, warn_if_clipped};
-pub use super::progress::{Bars, handle_interrupts};
+use super::progress::{Bars, handle_interrupts};
 use anyhow::{Context, Result, bail};
 use fluidymation::anim::{self, Animation, LoadOptions};
 use fluidymation::composite::{Recolor, StrokeMode};
