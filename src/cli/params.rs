@@ -91,7 +91,9 @@ pub struct SynthFlags {
     /// (patches unrotated), time-shift (no SHIFTNNF), segments (interior and border patches
     /// mixed), advection (no residual advection or rim re-anchoring), extent-normalization
     /// (raw target extents, as in the paper), extent-falloff (the extents weigh as much deep
-    /// inside a shape as at its edge, as in the paper).
+    /// inside a shape as at its edge, as in the paper), carried-rim (in the border band the
+    /// merge of the carried and the up-scaled field picks the match with the smaller error, as
+    /// in the paper, instead of keeping the carried one).
     #[arg(long, value_name = "PART", value_enum)]
     pub without: Vec<Part>,
 }
@@ -105,6 +107,7 @@ pub enum Part {
     Advection,
     ExtentNormalization,
     ExtentFalloff,
+    CarriedRim,
 }
 
 impl SynthFlags {
@@ -179,6 +182,7 @@ impl SynthFlags {
                 Part::Advection => b.advect(false),
                 Part::ExtentNormalization => b.ext_normalize(false),
                 Part::ExtentFalloff => b.extent_falloff(false),
+                Part::CarriedRim => b.carried_rim(false),
             };
         }
         Ok(b.build()?)

@@ -218,7 +218,7 @@ fn initial_field(
         };
         let ctx = Ctx::new(sl, tgt, omega, p.w_color, p, lv.keys(0));
         let kappa = if lv.finest_vote_only { p.coherence } else { 1.0 };
-        timed(&mut st.init, || merge(&ctx, &mut up, &pd, kappa));
+        timed(&mut st.init, || merge(&ctx, &mut up, &pd, kappa, p.carried_rim));
         out.evaluations += 2 * tgt.active.len() as u64;
     }
     up
@@ -355,7 +355,12 @@ fn repair(ctx: &Ctx, nnf: &mut Nnf) {
 
 /// MERGENNF: keeps, per pixel, whichever of `up` and `prev` has the smaller patch error —
 /// the up-scaled match `up` only when its error is below 1/κ of the carried match's
-/// (`kappa` = κ, 1 = the paper's comparison at face value).
+/// (`kappa` = κ, 1 = the paper's comparison at face value). With `keep_rim`
+/// ([`ParamsBuilder::carried_rim`](super::ParamsBuilder::carried_rim)) the carried match is
+/// kept without comparison in the target's border segment (`I^df < 1`): SHIFTNNF re-anchored
+/// it to the target's distance from the edge, while the up-scaled match is placed only as
+/// precisely as the coarser level's pixels, which near the edge is often the paler paint
+/// behind the exemplar's rim.
 ///
 /// The finest level merges with the coherence factor κ of the random search
 /// ([`ParamsBuilder::coherence`]): it is only voted, so the merge is the one choice made
@@ -364,7 +369,7 @@ fn repair(ctx: &Ctx, nnf: &mut Nnf) {
 /// carried texture; compared at face value, a fifth of the carried matches were replaced
 /// every frame, each by a paler one (measured on green-wash, long target: mean exemplar
 /// luminance of the replacement +0.01), and over 150 frames the paint paled and lost its rim.
-fn merge(ctx: &Ctx, up: &mut Nnf, prev: &Nnf, kappa: f32) {
+fn merge(ctx: &Ctx, up: &mut Nnf, prev: &Nnf, kappa: f32, keep_rim: bool) {
     let w = up.w;
     up.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
         for (x, m) in row.iter_mut().enumerate() {
@@ -374,8 +379,12 @@ fn merge(ctx: &Ctx, up: &mut Nnf, prev: &Nnf, kappa: f32) {
                 continue;
             }
             let win = ctx.window(q);
-            let eu = ctx.error_in(&win, m);
             let ep = ctx.error_in(&win, pm);
+            if keep_rim && ctx.tgt.segment(q) == 0 {
+                *m = Match { err: ep, ..*pm };
+                continue;
+            }
+            let eu = ctx.error_in(&win, m);
             if ep < kappa * eu {
                 *m = Match { err: ep, ..*pm };
             } else {
