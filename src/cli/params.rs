@@ -322,12 +322,19 @@ mod tests {
             estimate_sigma: Some(0.5),
             optimize_finest: true,
             keep_grain: true,
+            without: <Part as clap::ValueEnum>::value_variants().to_vec(),
             ..Default::default()
         };
         let args = flags.to_args();
         let back = Cli::try_parse_from(std::iter::once("x".to_string()).chain(args.clone())).unwrap().flags;
         assert_eq!(back.to_args(), args);
-        assert_eq!(back.params().unwrap(), flags.params().unwrap());
+        let p = back.params().unwrap();
+        assert_eq!(p, flags.params().unwrap());
+        // Every part named by `--without` is switched off.
+        let all_on = SynthFlags { without: Vec::new(), ..flags }.params().unwrap().to_builder();
+        let off = all_on.direction_rule(false).time_shift(false).segments(false).advect(false);
+        let off = off.ext_normalize(false).extent_falloff(false).carried_rim(false).build().unwrap();
+        assert_eq!(p, off);
     }
 
     #[test]
