@@ -492,8 +492,8 @@ impl ParamsBuilder {
     /// window's rim 0.42 of the first window's). The carried match was re-anchored to the
     /// edge, so keeping it keeps the rim: on that target green-wash's lowest window keeps 1.00
     /// of the first window's rim, every bundled exemplar at least 0.86, and the contrast holds
-    /// better too (blue-bloom's lowest window 0.74 → 0.90; the README, `quality`). Newly covered pixels (a growing edge) have no carried match
-    /// and are matched afresh as before.
+    /// better too (blue-bloom's lowest window 0.74 → 0.90; the README, `quality`). Newly
+    /// covered pixels (a growing edge) have no carried match and are matched afresh as before.
     ///
     /// Default: on.
     pub fn carried_rim(mut self, on: bool) -> Self {

@@ -378,12 +378,13 @@ fn merge(ctx: &Ctx, up: &mut Nnf, prev: &Nnf, kappa: f32, keep_rim: bool) {
             if !pm.ok {
                 continue;
             }
-            let win = ctx.window(q);
-            let ep = ctx.error_in(&win, pm);
             if keep_rim && ctx.tgt.segment(q) == 0 {
-                *m = Match { err: ep, ..*pm };
+                // Kept without comparison; its error is recomputed before any use.
+                *m = Match { err: f32::INFINITY, ..*pm };
                 continue;
             }
+            let win = ctx.window(q);
+            let ep = ctx.error_in(&win, pm);
             let eu = ctx.error_in(&win, m);
             if ep < kappa * eu {
                 *m = Match { err: ep, ..*pm };
