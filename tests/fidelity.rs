@@ -22,12 +22,12 @@ fn suite(options: SuiteOptions) -> SuiteReport {
 /// The identity at full size, every bundled exemplar: the issue's floors (PSNR ≥ 28 dB in every
 /// frame, edge darkening ≥ 0.9 of the exemplar's, coverage IoU ≥ 0.97).
 /// Measured: see the README's quality table (identity rows); the worst frame over all five is
-/// green-wash's 28.1 dB in frame 29 (the others 38.1–54.1; 28.4 before the carried rim was
-/// kept, `Params::carried_rim`), edge darkening 1.00 and IoU of the alpha 1.00 everywhere.
-/// The margin over the issue's 28 dB is thin for green-wash:
-/// with the search's estimate voted with σ = 0.5 instead of 0.7 (Params::estimate_sigma) the
-/// identity is no longer exact everywhere (it was 32.7 dB; 28.6 without the grain), and
-/// σ = 0.35 falls below (26.6).
+/// green-wash's 34.2 dB (the others 39.2 and over; ink-rims and yellow-granules exact).
+/// Before the supplied motion of the time shift was the exemplar flow's path (module
+/// `shift`, `time_step`) the warp moved the identity's interior matches by the extent's bias,
+/// and the worst frame was 28.1 dB (28.4 before the carried rim was kept); with the search's
+/// estimate voted with σ = 0.35 instead of 0.5 (Params::estimate_sigma) it fell below 28 (26.6).
+/// Floor: 32 dB, the measured 34.2 less 2 dB (above the issue's 28).
 #[test]
 fn identity_gives_back_the_exemplar_at_full_size() {
     let report = suite(SuiteOptions { targets: vec![], identity: true, ..SuiteOptions::default() });
@@ -35,7 +35,7 @@ fn identity_gives_back_the_exemplar_at_full_size() {
     for r in &report.rows {
         let id = r.identity.as_ref().unwrap();
         let worst = id.psnr.iter().copied().fold(f32::INFINITY, f32::min);
-        assert!(worst >= 28.0, "{}: PSNR {worst:.1} dB in frame {}", r.exemplar, id.psnr_min_frame);
+        assert!(worst >= 32.0, "{}: PSNR {worst:.1} dB in frame {}", r.exemplar, id.psnr_min_frame);
         let rim = r.summary.edge_darkening_ratio;
         assert!(rim.is_some_and(|v| v >= 0.9), "{}: edge darkening {rim:?}", r.exemplar);
         let iou = r.coverage_alpha;
@@ -57,10 +57,12 @@ fn check(what: &str, value: Option<f32>, floor: f32, higher: bool, failures: &mu
 /// Measured (`quality -e blue-bloom -e ink-rims --target growing --target translating
 /// --frames 24`; κ = 2 in the search and the finest merge, the search's estimates voted with
 /// σ = 0.5, the grain kept, advection by warping the field, the extent term only where no
-/// paint is carried and faded out in the interior, the carried rim kept in the border band):
-/// IoU of the alpha 0.996–0.997, contrast 0.84–0.95 (of the exemplar's at the same depths),
-/// edge darkening 0.80–1.06, palette 0.011–0.032, incoherent change 0.55–0.81, motion
-/// agreement 0.62–0.67. With the merge comparing the carried and up-scaled matches in the band
+/// paint is carried and faded out in the interior, the carried rim kept in the border band,
+/// the shifted field settled): IoU of the alpha 0.996–0.997, contrast 0.85–0.96 (of the
+/// exemplar's at the same depths), edge darkening 0.77–1.06, palette 0.011–0.034, incoherent
+/// change 0.57–0.82, motion agreement 0.61–0.67. Before the field was settled and the
+/// supplied motion was the flow's path: contrast 0.84–0.95, edge darkening 0.80–1.06, palette
+/// 0.011–0.032, incoherent change 0.55–0.81. With the merge comparing the carried and up-scaled matches in the band
 /// too (`--without carried-rim`, the previous default): contrast 0.81–0.92, edge darkening
 /// 0.70–1.02, palette 0.010–0.035, incoherent change 0.55–0.75. With the extents
 /// weighing the same deep inside (`--without extent-falloff`, the previous default): contrast
@@ -75,12 +77,12 @@ fn check(what: &str, value: Option<f32>, floor: f32, higher: bool, failures: &mu
 /// 1.22–2.0.
 ///
 /// The issue's floors are reached for coverage, incoherent change (≤ 1.2), motion agreement
-/// (≥ 0.6), the rim of all four runs (≥ 0.8), the contrast of ink-rims (0.91–0.95) and
-/// blue-bloom growing (0.87) and the palette of three; not yet for blue-bloom translating's
-/// contrast (0.85: 0.84) and ink-rims growing's palette (0.03: 0.032). The floors below are the
-/// measured values less a margin (~0.04–0.08; the spread between seeds and targets is ~0.05):
-/// contrast 0.78 against 0.84, edge darkening 0.72 against 0.80, palette 0.042 against 0.032,
-/// incoherent change 0.85 against 0.81, motion 0.55 against 0.62.
+/// (≥ 0.6), the contrast of all four runs (≥ 0.85), the rim of three (≥ 0.8) and the palette
+/// of three; not yet for blue-bloom growing's rim (0.8: 0.77) and ink-rims growing's palette
+/// (0.03: 0.034). The floors below are the measured values less a margin (~0.04–0.08; the
+/// spread between seeds and targets is ~0.05): contrast 0.78 against 0.85, edge darkening 0.72
+/// against 0.77, palette 0.042 against 0.034, incoherent change 0.88 against 0.82, motion 0.55
+/// against 0.61.
 #[test]
 fn moving_targets_keep_the_rim_texture_and_coherence() {
     let report = suite(SuiteOptions {
@@ -98,7 +100,7 @@ fn moving_targets_keep_the_rim_texture_and_coherence() {
         check(&name("contrast"), s.contrast_ratio, 0.78, true, &mut failures);
         check(&name("edge darkening"), s.edge_darkening_ratio, 0.72, true, &mut failures);
         check(&name("palette"), s.palette_distance_mean, 0.042, false, &mut failures);
-        check(&name("incoherent change"), s.incoherent_change_ratio, 0.85, false, &mut failures);
+        check(&name("incoherent change"), s.incoherent_change_ratio, 0.88, false, &mut failures);
         check(&name("motion agreement"), s.motion_agreement, 0.55, true, &mut failures);
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
@@ -112,18 +114,20 @@ fn moving_targets_keep_the_rim_texture_and_coherence() {
 /// Measured (`quality -e ink-rims -e blue-bloom --target long --scale 0.5`; κ = 2 in the
 /// search and the finest merge, the search's estimates voted with σ = 0.5, the grain kept,
 /// advection by warping the field, the extent term only where no paint is carried and faded
-/// out in the interior, the carried rim kept in the border band): lowest window ÷ first,
-/// contrast and rim: ink-rims 0.98 and 1.00, blue-bloom 0.90 and 0.87 (its first window has
-/// the young bloom's strong rim, which then settles); over the whole run contrast 0.75 and
-/// 0.69, edge darkening 1.39 and 1.23. The issue's floor (0.9 in every window) is reached but
-/// for blue-bloom's rim. Before the carried rim was kept the minima were ink-rims 0.80/0.98
-/// and blue-bloom 0.74/0.74. Before the extent
+/// out in the interior, the carried rim kept in the border band, the shifted field settled):
+/// lowest window ÷ first, contrast and rim: ink-rims 1.00 and 1.00, blue-bloom 0.92 and 0.83
+/// (its first window has the young bloom's strong rim, 1.18 of the exemplar's, which then
+/// settles to 0.98–1.32); over the whole run contrast 0.76 and 0.71, edge darkening 1.37 and
+/// 1.20. The issue's floor (0.9 in every window) is reached but for blue-bloom's rim. Before
+/// the field was settled: ink-rims 0.98/1.00, blue-bloom 0.90/0.87. Before the carried rim
+/// was kept the minima were ink-rims 0.80/0.98 and blue-bloom 0.74/0.74. Before the extent
 /// falloff the minima were ink-rims 0.83/0.99 and blue-bloom 0.76/0.70 (the falloff raises
 /// the first window's contrast more than the later ones': the later windows' absolute
 /// contrast moved by −0.01 to +0.04); before the sharper estimate and κ in the merge
 /// 0.83/0.99 and 0.73/0.76. Green-wash, the hardest (README, `quality`), went from 0.43/0.05
-/// to 0.61/0.28 with those, to 0.64/0.42 with the falloff and to 0.73/1.00 with the carried
-/// rim (see the next test). The floors here are the minima less 0.07–0.08.
+/// to 0.61/0.28 with those, to 0.64/0.42 with the falloff, to 0.73/1.00 with the carried
+/// rim and to 0.82/1.00 with the settled field (see the next test). The floors here are the
+/// minima less 0.07.
 #[test]
 fn long_target_keeps_its_paint_in_every_window() {
     let report = suite(SuiteOptions {
@@ -133,7 +137,7 @@ fn long_target_keeps_its_paint_in_every_window() {
         scale: 0.5,
         ..SuiteOptions::default()
     });
-    let floors = [("ink-rims", 0.90, 0.93), ("blue-bloom", 0.82, 0.80)];
+    let floors = [("ink-rims", 0.93, 0.93), ("blue-bloom", 0.85, 0.76)];
     let mut failures = Vec::new();
     for (r, (name, contrast, rim)) in report.rows.iter().zip(floors) {
         assert_eq!((r.exemplar.as_str(), r.frames, r.windows.len()), (name, 300, 6));
@@ -150,41 +154,51 @@ fn long_target_keeps_its_paint_in_every_window() {
 }
 
 /// Keeping the carried rim (`Params::carried_rim`, on by default) is what keeps the rim on a
-/// long target: MERGENNF compared in the border band too, the up-scaled match (placed only as
+/// long target, and settling the shifted field (`Params::settle`, on by default) what keeps
+/// its texture. MERGENNF compared in the border band too, the up-scaled match (placed only as
 /// precisely as a coarser level's pixels) replaced a few re-anchored rim matches a frame with
 /// the paler paint behind the exemplar's rim, and over 300 frames green-wash's rim was gone.
-/// The ablation on the long target at half size (as the previous test).
+/// Without the settling, every carried match is warped on its own, neighbours drift apart by
+/// fractions of a pixel a frame, and the vote averages the paint flat. The ablations on the
+/// long target at half size (as the previous test).
 ///
 /// Measured (`quality -e green-wash --target long --scale 0.5`, and with `--without
-/// carried-rim`): lowest window ÷ first, rim 1.00 against 0.42, contrast 0.73 against 0.64;
-/// last window's rim (of the exemplar's) 1.13 against 0.37. Floors: with it the rim stays at
-/// ≥ 0.85 of the first window's in every window and at least 0.3 above the run without; the
-/// contrast's lowest window at least 0.04 above (measured +0.09).
+/// carried-rim`, `--without settle`): lowest window ÷ first, rim 1.00 against 0.37 without the
+/// carried rim (1.00 without settling); contrast 0.82 against 0.70 and 0.74; over the whole
+/// run contrast 0.65 against 0.60 and 0.59, palette 0.027 against 0.043 and 0.043. Floors:
+/// the rim stays at ≥ 0.85 of the first window's in every window and at least 0.3 above the
+/// run without the carried rim; the lowest window's contrast is at least 0.04 above either
+/// ablation (measured +0.12 and +0.08), and the whole run's at least 0.03 above the run
+/// without settling (measured +0.06).
 #[test]
-fn carried_rim_keeps_the_rim_of_a_long_target() {
-    let lowest = |carried_rim: bool| {
+fn carried_rim_and_settled_field_keep_the_paint_of_a_long_target() {
+    let run = |params: Params| {
         let report = suite(SuiteOptions {
             exemplars: vec!["green-wash".into()],
             targets: vec![TargetKind::Long],
             identity: false,
             scale: 0.5,
-            params: Params::builder().carried_rim(carried_rim).build().unwrap(),
+            params,
             ..SuiteOptions::default()
         });
-        let windows = &report.rows[0].windows;
-        assert_eq!(windows.len(), 6);
+        let row = &report.rows[0];
+        assert_eq!(row.windows.len(), 6);
         let min = |f: fn(&quality::Window) -> Option<f32>| {
-            windows.iter().map(|w| f(w).unwrap_or(f32::NEG_INFINITY)).fold(f32::INFINITY, f32::min)
+            row.windows.iter().map(|w| f(w).unwrap_or(f32::NEG_INFINITY)).fold(f32::INFINITY, f32::min)
         };
-        (min(|w| w.rim_vs_first), min(|w| w.contrast_vs_first))
+        (min(|w| w.rim_vs_first), min(|w| w.contrast_vs_first), row.summary.contrast_ratio.unwrap_or(0.0))
     };
-    let ((rim, contrast), (rim_paper, contrast_paper)) = (lowest(true), lowest(false));
+    let (rim, contrast, whole) = run(Params::default());
+    let (rim_merged, contrast_merged, _) = run(Params::builder().carried_rim(false).build().unwrap());
+    let (_, contrast_unsettled, whole_unsettled) = run(Params::builder().settle(false).build().unwrap());
     let what = format!(
-        "lowest window ÷ first: rim {rim:.2} kept, {rim_paper:.2} merged; contrast {contrast:.2} kept, \
-         {contrast_paper:.2} merged"
+        "lowest window ÷ first: rim {rim:.2}, {rim_merged:.2} without the carried rim; contrast \
+         {contrast:.2}, {contrast_merged:.2} without the carried rim, {contrast_unsettled:.2} without \
+         settling; whole run's contrast {whole:.2}, {whole_unsettled:.2} without settling"
     );
-    assert!(rim >= 0.85 && rim >= rim_paper + 0.3, "{what}");
-    assert!(contrast >= contrast_paper + 0.04, "{what}");
+    assert!(rim >= 0.85 && rim >= rim_merged + 0.3, "{what}");
+    assert!(contrast >= contrast_merged + 0.04 && contrast >= contrast_unsettled + 0.04, "{what}");
+    assert!(whole >= whole_unsettled + 0.03, "{what}");
 }
 
 /// The extent falloff (`Params::extent_falloff`, on by default) gives a still shape's interior
@@ -232,8 +246,9 @@ fn extent_falloff_gives_still_interiors_the_exemplar_texture() {
 /// the later frames' lobes. The ablation on the identity at full size.
 ///
 /// Measured (`quality -e green-wash --target identity`, and with `--flow-weight 0`): worst
-/// frame 28.1 dB (frame 29) with the extent term, 17.2 dB (frame 1) without; median 32.6
-/// against 28.7. Floor: the term gains at least 6 dB on the worst frame (measured 10.9).
+/// frame 34.2 dB with the extent term, 17.2 dB (frame 1) without; median 39.7 against 33.6
+/// (before the supplied motion was the flow's path: 28.1 against 17.2). Floor: the term gains
+/// at least 6 dB on the worst frame (measured 17.0).
 #[test]
 fn extent_term_tells_the_paint_s_age_on_the_identity() {
     let worst = |w_ext: f32| {

@@ -499,6 +499,7 @@ fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevS
         active: &active,
         time_shift: p.time_shift,
         advect: p.advect,
+        settle: p.settle,
     };
     shift::shift_nnf(&inputs, &prev.nnf0)
 }

@@ -140,6 +140,8 @@ pub(crate) struct PixInfo {
     pub ext_neg: f32,
     /// [`VALID`] | [`INTERIOR`] | [`IN_MASK`].
     pub flags: u8,
+    /// `|S^flow|`: how far the paint here moves to the next frame, full-resolution pixels.
+    pub speed: f32,
 }
 
 /// Unit direction of a flow vector, or zero where it is too small to have a direction
@@ -614,7 +616,8 @@ fn build_level(
                 valid[interior as usize].push(idx as u32);
             }
             feat[idx][FLAG_LANE] = flags;
-            info[idx] = PixInfo { dir: flow_dir(g.flow.get(x, y)), dist, ext_pos: ep, ext_neg: en, flags };
+            let f = g.flow.get(x, y);
+            info[idx] = PixInfo { dir: flow_dir(f), dist, ext_pos: ep, ext_neg: en, flags, speed: f.length() };
         }
     }
     let dirs = info.iter().map(|p| p.dir).collect();

@@ -90,6 +90,7 @@ impl TargetLevel {
                     ext_pos: g.ext_pos.get(x, y),
                     ext_neg: g.ext_neg.get(x, y),
                     flags,
+                    speed: 0.0,
                 };
             }
         });
