@@ -23,6 +23,10 @@ pub struct Args {
     /// Worker threads [default: all cores].
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Write the workload instead of timing it: DIR/masks/0001.png … (the target's masks) and
+    /// DIR/exemplar (the exemplar), to time `synth` or `render` on it end to end.
+    #[arg(long, value_name = "DIR")]
+    pub save_workload: Option<std::path::PathBuf>,
     #[command(flatten)]
     pub flags: SynthFlags,
 }
@@ -48,6 +52,9 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
         Some(e) => super::find_exemplar(e, &[])?,
         None => workload::horse_exemplar()?,
     };
+    if let Some(dir) = &args.save_workload {
+        return save_workload(dir, &exemplar, args.frames, (w, h), ctx);
+    }
     let t = Instant::now();
     let source = Source::prepare(&exemplar, &params)?;
     let prepare = t.elapsed();
@@ -125,6 +132,32 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     );
     if let Some(m) = peak_memory_mib() {
         println!("peak memory: {:.0} MiB", m);
+    }
+    Ok(())
+}
+
+/// Writes the workload's masks and exemplar under `dir` (see [`Args::save_workload`]).
+fn save_workload(
+    dir: &std::path::Path,
+    exemplar: &fluidymation::exemplar::Exemplar,
+    frames: usize,
+    (w, h): (usize, usize),
+    ctx: &Ctx,
+) -> Result<()> {
+    let masks = dir.join("masks");
+    std::fs::create_dir_all(&masks).with_context(|| format!("could not create '{}'", masks.display()))?;
+    for k in 0..frames {
+        fluidymation::img::save_gray(&masks.join(format!("{:04}.png", k + 1)), &workload::horse_mask(w, h, k))?;
+    }
+    let ex = dir.join("exemplar");
+    exemplar.save(&ex, true)?;
+    if !ctx.quiet {
+        println!("{} masks of {w}x{h} in {}, the exemplar in {}", frames, masks.display(), ex.display());
+        println!(
+            "time it end to end: fluidymation synth --exemplar {} --masks {} -o OUT",
+            ex.display(),
+            masks.display()
+        );
     }
     Ok(())
 }

@@ -6,10 +6,10 @@ use super::progress::Bars;
 use anyhow::{Context, Result, bail};
 use fluidymation::Progress;
 use fluidymation::anim::{self, LoadOptions};
-use fluidymation::guide::GuideStream;
 use fluidymation::img::{self, Plane};
-use fluidymation::synth::{Source, Synthesizer};
+use fluidymation::synth::Source;
 use std::path::PathBuf;
+use std::time::{Duration, Instant};
 
 /// Arguments of `synth`.
 #[derive(clap::Args, Debug)]
@@ -42,6 +42,7 @@ pub struct Args {
 /// Runs `synth`.
 pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     set_threads(args.threads)?;
+    let t0 = Instant::now();
     let params = args.flags.params()?;
     let exemplar = super::find_exemplar(&args.exemplar, &args.exemplar_dir)?;
     let anim = anim::load(&args.masks, &LoadOptions { scale: params.target_scale(), ..Default::default() })
@@ -63,26 +64,37 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     } else {
         params
     };
-    let source = Source::prepare(&exemplar, &params)
-        .with_context(|| format!("could not prepare exemplar '{}'", exemplar.meta.name))?;
-    let mut synth = Synthesizer::new(source, params.clone())?;
-    synth.set_debug(args.debug.is_some());
+    let read = t0.elapsed();
+    let t = Instant::now();
     let masks_anim = &anim;
-    let stream = GuideStream::new(anim.frames, |i| Ok(masks_anim.render(0, i)?.coverage()), params.guide())
-        .context("could not compute the target guides")?;
-    synth.set_target_extent(stream.extent_scale());
-    let start = std::time::Instant::now();
+    let (mut synth, stream) = fluidymation::synth::start(
+        || Source::prepare(&exemplar, &params),
+        &params,
+        anim.frames,
+        |i| Ok(masks_anim.render(0, i)?.coverage()),
+    )
+    .with_context(|| format!("could not prepare exemplar '{}' and the target's guides", exemplar.meta.name))?;
+    synth.set_debug(args.debug.is_some());
+    let mut time = Phases { prepare: t.elapsed(), ..Phases::default() };
+    let start = Instant::now();
     let mut written = 0;
-    for (k, g) in stream.enumerate() {
+    let mut stream = stream.enumerate();
+    loop {
+        let t = Instant::now();
+        let Some((k, g)) = stream.next() else { break };
         if k >= range.end {
             break;
         }
         let g = g.with_context(|| format!("could not compute the guides of frame {}", k + 1))?;
+        time.guides += t.elapsed();
+        let t = Instant::now();
         let out = synth.step(&g).with_context(|| format!("synthesis failed at frame {}", k + 1))?;
+        time.synthesis += t.elapsed();
         bars.update("frames", k + 1, range.end);
         if k < range.start {
             continue;
         }
+        let t = Instant::now();
         let rgba = Plane::from_fn(out.rgb.width(), out.rgb.height(), |x, y| {
             let c = out.rgb.get(x, y);
             [c[0], c[1], c[2], if out.mask.get(x, y) { 1.0 } else { 0.0 }]
@@ -94,6 +106,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
             img::save_gray(&dir.join(format!("omega_{:04}.png", k + 1)), &d.omega.map(|v| v / max))?;
         }
         written += 1;
+        time.writing += t.elapsed();
     }
     bars.clear();
     if written == 0 {
@@ -108,6 +121,25 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
             secs / written as f64,
             args.output.display()
         );
+        let s = |d: Duration| d.as_secs_f64();
+        eprintln!(
+            "  reading the masks {:.2} s, preparing the exemplar and the guides' backward pass {:.2} s, target \
+             guides {:.2} s, synthesis {:.2} s, writing {:.2} s",
+            s(read),
+            s(time.prepare),
+            s(time.guides),
+            s(time.synthesis),
+            s(time.writing)
+        );
     }
     Ok(())
+}
+
+/// Where the time of the frame loop goes (reported after the run).
+#[derive(Default)]
+struct Phases {
+    prepare: Duration,
+    guides: Duration,
+    synthesis: Duration,
+    writing: Duration,
 }

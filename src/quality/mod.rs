@@ -15,8 +15,9 @@
 //!   relative to the first window's.
 //!
 //! **Pipeline.** Per run, as `synth` and `render` paint a layer: σ and b fitted to the target's
-//! thickness ([`Params::fit_to_thickness`], unless switched off), [`Source::prepare`], the
-//! [`GuideStream`], and [`Synthesizer::step`] per frame, with [`SuiteOptions::params`]
+//! thickness ([`Params::fit_to_thickness`], unless switched off), [`Source::prepare`] and the
+//! [`GuideStream`](crate::guide::GuideStream) by [`crate::synth::start`], and
+//! [`Synthesizer::step`](crate::synth::Synthesizer::step) per frame, with [`SuiteOptions::params`]
 //! (defaults and `--seed 1` unless given).
 //!
 //! **Measures.** The output (the engine's RGB with alpha = its mask) is flattened over the
@@ -57,10 +58,9 @@ use crate::eval::{
     self, EvalOptions, Evaluator, ExemplarSummary, Painted, Reference, RimParams, Summary, intersection_union,
 };
 use crate::exemplar::{self, Exemplar, SearchPath};
-use crate::guide::GuideStream;
 use crate::img::{Mask, Plane, Rgb, Rgba};
 use crate::progress::Progress;
-use crate::synth::{Params, Source, Synthesizer, resample_exemplar, sequence_thickness};
+use crate::synth::{Params, Source, resample_exemplar, sequence_thickness};
 use serde::{Deserialize, Serialize};
 use sheet::SheetRow;
 use std::path::PathBuf;
@@ -322,10 +322,8 @@ impl Engine {
 
 impl Painter for Engine {
     fn paint(&self, run: &RunSpec<'_>, emit: &mut dyn FnMut(PaintedFrame) -> Result<()>) -> Result<()> {
-        let source = self.source(run)?;
-        let stream = GuideStream::new(run.frames, |k| Ok((run.coverage)(k)), run.params.guide())?;
-        let mut synth = Synthesizer::new(source, run.params.clone())?;
-        synth.set_target_extent(stream.extent_scale());
+        let (mut synth, stream) =
+            crate::synth::start(|| self.source(run), run.params, run.frames, |k| Ok((run.coverage)(k)))?;
         for g in stream {
             let out = synth.step(&g?)?;
             emit(PaintedFrame { rgb: out.rgb, mask: out.mask })?;

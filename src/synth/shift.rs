@@ -253,9 +253,10 @@ fn settle(f: &Nnf, active: &[bool]) -> Nnf {
             }
         }
         if n >= 3 {
-            xs[..n].sort_unstable_by(f32::total_cmp);
-            ys[..n].sort_unstable_by(f32::total_cmp);
-            (o.x, o.y) = (xs[n / 2], ys[n / 2]);
+            (o.x, o.y) = (
+                *xs[..n].select_nth_unstable_by(n / 2, f32::total_cmp).1,
+                *ys[..n].select_nth_unstable_by(n / 2, f32::total_cmp).1,
+            );
         }
     });
     out

@@ -13,6 +13,7 @@ use super::params::{HALF, Params};
 use crate::guide::FrameGuides;
 use crate::img::{self, Plane, Rgb};
 use glam::Vec2;
+use rayon::prelude::*;
 
 /// Lanes per pixel.
 pub(crate) const LANES: usize = 8;
@@ -583,42 +584,57 @@ fn build_level(
     let frames = rgb.len();
     let mut feat = vec![[0u8; LANES]; frame_len * frames];
     let mut info = vec![PixInfo::default(); frame_len * frames];
+    // Frames are independent: each fills its own slice and lists its own valid centers, which
+    // are joined in frame order (the same lists as a serial pass).
+    let per_frame: Vec<([Vec<u32>; 2], [usize; 2])> = feat
+        .par_chunks_mut(frame_len)
+        .zip(info.par_chunks_mut(frame_len))
+        .zip(rgb.par_iter().zip(guides))
+        .enumerate()
+        .map(|(i, ((feat, info), (c, g)))| {
+            let roi = dilate(&g.mask, HALF);
+            let mut valid: [Vec<u32>; 2] = [Vec::new(), Vec::new()];
+            let mut seg_count = [0usize; 2];
+            for (offset, x, y, inside) in padded_pixels(w, h) {
+                let col = c.get(x, y);
+                let dist = g.dist.get(x, y);
+                let df = (dist / b).min(1.0);
+                let ep = g.ext_pos.get(x, y);
+                let en = g.ext_neg.get(x, y);
+                let fade = extent_falloff(falloff, dist / b);
+                let v = [col[0], col[1], col[2], df, ep * fade, en * fade, 0.0, 0.0];
+                feat[offset] = std::array::from_fn(|k| if k < 6 { qn.quantize(k, v[k]) } else { 0 });
+                if !inside {
+                    continue;
+                }
+                let interior = dist >= b;
+                let in_mask = g.mask.get(x, y);
+                let away = x >= MARGIN && y >= MARGIN && x + MARGIN < w && y + MARGIN < h;
+                let mut flags = 0;
+                if interior {
+                    flags |= INTERIOR;
+                }
+                if in_mask {
+                    flags |= IN_MASK;
+                    seg_count[interior as usize] += 1;
+                }
+                if roi.get(x, y) && away {
+                    flags |= VALID;
+                    valid[interior as usize].push((i * frame_len + offset) as u32);
+                }
+                feat[offset][FLAG_LANE] = flags;
+                let f = g.flow.get(x, y);
+                info[offset] = PixInfo { dir: flow_dir(f), dist, ext_pos: ep, ext_neg: en, flags, speed: f.length() };
+            }
+            (valid, seg_count)
+        })
+        .collect();
     let mut valid: [Vec<u32>; 2] = [Vec::new(), Vec::new()];
-    let mut seg_count = vec![[0usize; 2]; frames];
-    for (i, (c, g)) in rgb.iter().zip(guides).enumerate() {
-        let roi = dilate(&g.mask, HALF);
-        for (offset, x, y, inside) in padded_pixels(w, h) {
-            let col = c.get(x, y);
-            let dist = g.dist.get(x, y);
-            let df = (dist / b).min(1.0);
-            let ep = g.ext_pos.get(x, y);
-            let en = g.ext_neg.get(x, y);
-            let idx = i * frame_len + offset;
-            let fade = extent_falloff(falloff, dist / b);
-            let v = [col[0], col[1], col[2], df, ep * fade, en * fade, 0.0, 0.0];
-            feat[idx] = std::array::from_fn(|k| if k < 6 { qn.quantize(k, v[k]) } else { 0 });
-            if !inside {
-                continue;
-            }
-            let interior = dist >= b;
-            let in_mask = g.mask.get(x, y);
-            let away = x >= MARGIN && y >= MARGIN && x + MARGIN < w && y + MARGIN < h;
-            let mut flags = 0;
-            if interior {
-                flags |= INTERIOR;
-            }
-            if in_mask {
-                flags |= IN_MASK;
-                seg_count[i][interior as usize] += 1;
-            }
-            if roi.get(x, y) && away {
-                flags |= VALID;
-                valid[interior as usize].push(idx as u32);
-            }
-            feat[idx][FLAG_LANE] = flags;
-            let f = g.flow.get(x, y);
-            info[idx] = PixInfo { dir: flow_dir(f), dist, ext_pos: ep, ext_neg: en, flags, speed: f.length() };
-        }
+    let mut seg_count = Vec::with_capacity(frames);
+    for (v, n) in per_frame {
+        valid[0].extend(v[0].iter());
+        valid[1].extend(v[1].iter());
+        seg_count.push(n);
     }
     let dirs = info.iter().map(|p| p.dir).collect();
     let lists = [&valid[0][..], &valid[1][..], &[]];
@@ -672,7 +688,8 @@ pub(crate) const GRAIN_STD_UNIT: f32 = 1020.0;
 fn build_grain(level: &mut SourceLevel, rgb: &[Plane<Rgb>], guides: &[FrameGuides]) {
     let (w, h) = (level.w, level.h);
     let mut grain = vec![[0u8; 4]; level.feat.len()];
-    for (i, (c, g)) in rgb.iter().zip(guides).enumerate() {
+    let frames = grain.par_chunks_mut(level.frame_len).zip(rgb.par_iter().zip(guides));
+    frames.for_each(|(grain, (c, g))| {
         // Low-pass within each segment: the edge of the paint is structure, not grain.
         let split = |f: &dyn Fn(usize, usize) -> [f32; 4]| -> [Plane<[f32; 4]>; 2] {
             [false, true].map(|inside| {
@@ -699,10 +716,9 @@ fn build_grain(level: &mut SourceLevel, rgb: &[Plane<Rgb>], guides: &[FrameGuide
             let l = low.get(x, y);
             let sd = norm(&var, x, y)[0].max(0.0).sqrt();
             let q = |v: f32, unit: f32| (v * unit).round().clamp(0.0, 255.0) as u8;
-            grain[i * level.frame_len + offset] =
-                [q(l[0], 255.0), q(l[1], 255.0), q(l[2], 255.0), q(sd, GRAIN_STD_UNIT)];
+            grain[offset] = [q(l[0], 255.0), q(l[1], 255.0), q(l[2], 255.0), q(sd, GRAIN_STD_UNIT)];
         }
-    }
+    });
     level.grain = grain;
 }
 

@@ -1,0 +1,91 @@
+//! `synth` and `bench --save-workload` end to end, spawning the binary: the workload written to
+//! disk is what `synth` reads, the frames asked for are the frames written, their alpha is the
+//! target's mask, the summary says where the time went, and a missing input is an error that
+//! names it.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_fluidymation")).args(args).output().unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("fm-synth-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn saved_workload_is_synthesized_frame_by_frame() {
+    let dir = scratch("workload");
+    let o = run(&["bench", "--frames", "4", "--size", "200x160", "--save-workload", s(&dir)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let masks = dir.join("masks");
+    let names: Vec<String> = {
+        let mut v: Vec<String> =
+            std::fs::read_dir(&masks).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        v.sort();
+        v
+    };
+    assert_eq!(names, ["0001.png", "0002.png", "0003.png", "0004.png"]);
+    assert!(dir.join("exemplar/exemplar.toml").is_file());
+
+    let out = dir.join("out");
+    let o = run(&[
+        "synth",
+        "--exemplar",
+        s(&dir.join("exemplar")),
+        "--masks",
+        s(&masks),
+        "-o",
+        s(&out),
+        "--frames",
+        "2..3",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut written: Vec<String> =
+        std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    written.sort();
+    assert_eq!(written, ["0002.png", "0003.png"], "only the frames asked for, no temporary left");
+    // The alpha is the target's mask (anti-aliased edge pixels aside), and inside it the paint
+    // is not the paper: the exemplar's paint.
+    let frame = image::open(out.join("0003.png")).unwrap().to_rgba8();
+    let mask = image::open(masks.join("0003.png")).unwrap().to_luma8();
+    assert_eq!(frame.dimensions(), (200, 160));
+    let (mut agree, mut inside, mut painted) = (0, 0, 0);
+    for (p, m) in frame.pixels().zip(mask.pixels()) {
+        let want = m[0] >= 128;
+        agree += ((p[3] == 255) == want) as usize;
+        if want {
+            inside += 1;
+            painted += (p[0].min(p[1]).min(p[2]) < 200) as usize;
+        }
+    }
+    assert!(agree as f64 >= 0.99 * 200.0 * 160.0, "alpha agrees with the mask on {agree} pixels");
+    assert!(inside > 500 && painted as f64 >= 0.5 * inside as f64, "{painted} of {inside} mask pixels painted");
+    let err = stderr(&o);
+    for phase in ["reading the masks", "preparing the exemplar", "target guides", "synthesis", "writing"] {
+        assert!(err.contains(phase), "the summary names '{phase}': {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn synth_names_a_missing_input() {
+    let dir = scratch("missing");
+    let nowhere = dir.join("no-such-masks");
+    let o = run(&["synth", "--exemplar", "blue-bloom", "--masks", s(&nowhere), "-o", s(&dir.join("out"))]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no-such-masks"), "{}", stderr(&o));
+    let _ = std::fs::remove_dir_all(&dir);
+}
