@@ -1,7 +1,7 @@
 //! `fluidymation bench`: the end-to-end speed of the engine on a paper-like workload.
 
 use super::Ctx;
-use super::params::{SynthFlags, set_threads};
+use super::params::{ExemplarDirs, SynthFlags, Threads};
 use anyhow::{Context, Result};
 use fluidymation::guide::GuideStream;
 use fluidymation::synth::{Source, StageTimes, Synthesizer};
@@ -20,9 +20,10 @@ pub struct Args {
     /// Exemplar (name or folder) [default: a generated 400x222x20 bloom, as in the paper's horse].
     #[arg(long, short = 'e')]
     pub exemplar: Option<String>,
-    /// Worker threads [default: all cores].
-    #[arg(long)]
-    pub threads: Option<usize>,
+    #[command(flatten)]
+    pub exemplar_dir: ExemplarDirs,
+    #[command(flatten)]
+    pub threads: Threads,
     /// Write the workload instead of timing it: DIR/masks/0001.png … (the target's masks) and
     /// DIR/exemplar (the exemplar), to time `synth` or `render` on it end to end.
     #[arg(long, value_name = "DIR")]
@@ -40,7 +41,7 @@ fn peak_memory_mib() -> Option<f64> {
 
 /// Runs `bench`.
 pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
-    set_threads(args.threads)?;
+    args.threads.apply()?;
     let params = args.flags.params()?;
     let (w, h) = args
         .size
@@ -49,7 +50,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
         .filter(|&(a, b)| (64..=8192).contains(&a) && (64..=8192).contains(&b))
         .with_context(|| format!("--size '{}': expected WxH between 64 and 8192, e.g. 1000x800", args.size))?;
     let exemplar = match &args.exemplar {
-        Some(e) => super::find_exemplar(e, &[])?,
+        Some(e) => super::find_exemplar(e, &args.exemplar_dir.dirs)?,
         None => workload::horse_exemplar()?,
     };
     if let Some(dir) = &args.save_workload {

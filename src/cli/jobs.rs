@@ -3,7 +3,7 @@
 //! scheduler, they give the same bytes as `render`.
 
 use super::Ctx;
-use super::params::set_threads;
+use super::params::Threads;
 use super::progress::{Bars, handle_interrupts};
 use super::render::{RenderArgs, check_args, check_layer_keys, file_options, load_input};
 use anyhow::{Context, Result, bail};
@@ -24,9 +24,8 @@ pub struct LayerArgs {
     /// The layer to paint: its name or 1-based index.
     #[arg(long, value_name = "LAYER")]
     pub layer: String,
-    /// Worker threads [default: all cores]. The output does not depend on it.
-    #[arg(long, value_name = "N")]
-    pub threads: Option<usize>,
+    #[command(flatten)]
+    pub threads: Threads,
     #[command(flatten)]
     pub render: RenderArgs,
 }
@@ -44,16 +43,15 @@ pub struct CompositeArgs {
     /// Also write an animated GIF.
     #[arg(long, value_name = "FILE")]
     pub gif: Option<PathBuf>,
-    /// Worker threads [default: all cores]. The output does not depend on it.
-    #[arg(long, value_name = "N")]
-    pub threads: Option<usize>,
+    #[command(flatten)]
+    pub threads: Threads,
     #[command(flatten)]
     pub render: RenderArgs,
 }
 
 /// Runs `render-layer`.
 pub fn run_layer(args: LayerArgs, ctx: &Ctx) -> Result<()> {
-    set_threads(args.threads)?;
+    args.threads.apply()?;
     let styles = check_args(&args.render)?;
     let anim = load_input(&args.input, &args.render)?;
     check_layer_keys(&args.render, styles.as_ref(), &[&anim])?;
@@ -97,7 +95,7 @@ pub fn run_layer(args: LayerArgs, ctx: &Ctx) -> Result<()> {
 
 /// Runs `composite`.
 pub fn run_composite(args: CompositeArgs, ctx: &Ctx) -> Result<()> {
-    set_threads(args.threads)?;
+    args.threads.apply()?;
     let styles = check_args(&args.render)?;
     let anim = load_input(&args.input, &args.render)?;
     check_layer_keys(&args.render, styles.as_ref(), &[&anim])?;

@@ -278,6 +278,30 @@ pub fn warn_if_clipped(spec: Option<&str>, range: &std::ops::Range<usize>, total
 }
 
 /// Sets the global thread count.
+/// `--threads`, the same on every command that computes.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct Threads {
+    /// Worker threads [default: all cores]. The results do not depend on it (timings do).
+    #[arg(long = "threads", value_name = "N")]
+    pub n: Option<usize>,
+}
+
+impl Threads {
+    /// Sizes the global thread pool (see [`set_threads`]).
+    pub fn apply(&self) -> Result<()> {
+        set_threads(self.n)
+    }
+}
+
+/// `--exemplar-dir`, the same on every command that looks exemplars up by name.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct ExemplarDirs {
+    /// Extra folder to look for exemplars in, before FLUIDYMATION_EXEMPLARS, the user's
+    /// exemplar folder and the bundled set (repeatable).
+    #[arg(long = "exemplar-dir", value_name = "DIR")]
+    pub dirs: Vec<std::path::PathBuf>,
+}
+
 pub fn set_threads(threads: Option<usize>) -> Result<()> {
     if let Some(n) = threads {
         if n == 0 || n > 1024 {

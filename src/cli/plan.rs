@@ -134,7 +134,7 @@ pub fn run(args: Args, _ctx: &Ctx) -> Result<()> {
         args.targets.inputs.iter().map(|i| load_input(i, &args.render)).collect::<Result<_>>()?;
     check_layer_keys(&args.render, styles.as_ref(), &anims.iter().collect::<Vec<_>>())?;
     let mut known = HashMap::new();
-    let dirs: Vec<PathBuf> = args.render.exemplar_dir.iter().map(|d| absolute(d)).collect::<Result<_>>()?;
+    let dirs: Vec<PathBuf> = args.render.exemplar_dir.dirs.iter().map(|d| absolute(d)).collect::<Result<_>>()?;
     let mut plan = Plan {
         format: PLAN_FORMAT,
         fluidymation: env!("CARGO_PKG_VERSION"),

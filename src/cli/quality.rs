@@ -1,7 +1,7 @@
 //! `fluidymation quality`: the quality suite — every exemplar on generated targets, one table.
 
 use super::Ctx;
-use super::params::{SynthFlags, set_threads};
+use super::params::{ExemplarDirs, SynthFlags, Threads};
 use super::progress::Bars;
 use anyhow::{Context, Result, bail};
 use fluidymation::img;
@@ -40,19 +40,17 @@ pub struct Args {
     /// Runs painted at the same time (each uses every thread for its own stages).
     #[arg(long, default_value_t = 2)]
     pub jobs: usize,
-    /// Worker threads [default: all cores]. The numbers do not depend on it.
-    #[arg(long)]
-    pub threads: Option<usize>,
-    /// Extra directories to look for exemplars by name.
-    #[arg(long, value_name = "DIR")]
-    pub exemplar_dir: Vec<PathBuf>,
+    #[command(flatten)]
+    pub threads: Threads,
+    #[command(flatten)]
+    pub exemplar_dir: ExemplarDirs,
     #[command(flatten)]
     pub flags: SynthFlags,
 }
 
 /// Runs `quality`.
 pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
-    set_threads(args.threads)?;
+    args.threads.apply()?;
     if args.flags.target_scale.is_some() {
         bail!("--target-scale is for `synth`; use --scale with `quality`");
     }
@@ -76,7 +74,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     };
     let options = SuiteOptions {
         exemplars: args.exemplar,
-        exemplar_dirs: args.exemplar_dir,
+        exemplar_dirs: args.exemplar_dir.dirs,
         targets,
         identity,
         scale: args.scale,

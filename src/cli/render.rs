@@ -2,7 +2,7 @@
 //! batch; and the options it shares with `plan`, `render-layer` and `composite`.
 
 use super::Ctx;
-use super::params::{SynthFlags, parse_frames, set_threads, warn_if_clipped};
+use super::params::{ExemplarDirs, SynthFlags, Threads, parse_frames, warn_if_clipped};
 use super::progress::{Bars, handle_interrupts};
 use anyhow::{Context, Result, bail};
 use fluidymation::anim::{self, Animation, LoadOptions};
@@ -51,9 +51,8 @@ pub struct RenderArgs {
     /// Make each layer inside a precomp a region of its own.
     #[arg(long)]
     pub split_precomps: bool,
-    /// Extra directories to look for exemplars by name.
-    #[arg(long, value_name = "DIR")]
-    pub exemplar_dir: Vec<PathBuf>,
+    #[command(flatten)]
+    pub exemplar_dir: ExemplarDirs,
     #[command(flatten, next_help_heading = "Synthesis (seed and engine parameters)")]
     pub flags: SynthFlags,
 }
@@ -90,9 +89,8 @@ impl Targets {
 pub struct Args {
     #[command(flatten)]
     pub targets: Targets,
-    /// Worker threads [default: all cores]. The output does not depend on it.
-    #[arg(long, value_name = "N")]
-    pub threads: Option<usize>,
+    #[command(flatten)]
+    pub threads: Threads,
     /// Continue an interrupted (Ctrl-C, killed) render into the same OUT_DIR; give the same
     /// options as the interrupted run. In a batch, finished files are skipped and files not
     /// yet started are rendered.
@@ -324,7 +322,7 @@ pub fn file_options(
         }
     }
     opts.gif = gif;
-    opts.exemplar_dirs = args.exemplar_dir.clone();
+    opts.exemplar_dirs = args.exemplar_dir.dirs.clone();
     opts.background = args.background.clone();
     // Mask sequences are white on nothing: glazed in their own color they would not show.
     let masks_only = anim.regions.iter().all(|r| r.kind == anim::RegionKind::MaskSequence);
@@ -409,7 +407,7 @@ impl Progress for FileProgress<'_> {
 
 /// Runs `render`.
 pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
-    set_threads(args.threads)?;
+    args.threads.apply()?;
     let styles = check_args(&args.render)?;
     if args.parallel_files == 0 {
         bail!("--parallel-files 0: expected at least 1");

@@ -1,7 +1,7 @@
 //! `fluidymation synth`: the engine on a plain mask sequence, as the thesis's program ran.
 
 use super::Ctx;
-use super::params::{SynthFlags, parse_frames, set_threads, warn_if_clipped};
+use super::params::{ExemplarDirs, SynthFlags, Threads, parse_frames, warn_if_clipped};
 use super::progress::Bars;
 use anyhow::{Context, Result, bail};
 use fluidymation::Progress;
@@ -26,25 +26,23 @@ pub struct Args {
     /// Frames to synthesize, 1-based inclusive (e.g. 1..24). Guides still use every frame.
     #[arg(long)]
     pub frames: Option<String>,
-    /// Worker threads [default: all cores]. The output does not depend on it.
-    #[arg(long)]
-    pub threads: Option<usize>,
+    #[command(flatten)]
+    pub threads: Threads,
     /// Also write the field (frame index and position as colors) and Ω per frame here.
     #[arg(long, value_name = "DIR")]
     pub debug: Option<PathBuf>,
-    /// Extra directories to look for exemplars by name.
-    #[arg(long, value_name = "DIR")]
-    pub exemplar_dir: Vec<PathBuf>,
+    #[command(flatten)]
+    pub exemplar_dir: ExemplarDirs,
     #[command(flatten)]
     pub flags: SynthFlags,
 }
 
 /// Runs `synth`.
 pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
-    set_threads(args.threads)?;
+    args.threads.apply()?;
     let t0 = Instant::now();
     let params = args.flags.params()?;
-    let exemplar = super::find_exemplar(&args.exemplar, &args.exemplar_dir)?;
+    let exemplar = super::find_exemplar(&args.exemplar, &args.exemplar_dir.dirs)?;
     let anim = anim::load(&args.masks, &LoadOptions { scale: params.target_scale(), ..Default::default() })
         .with_context(|| format!("could not read the masks in '{}'", args.masks.display()))?;
     let range = parse_frames(args.frames.as_deref(), anim.frames)?;
