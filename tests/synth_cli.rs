@@ -87,5 +87,10 @@ fn synth_names_a_missing_input() {
     let o = run(&["synth", "--exemplar", "blue-bloom", "--masks", s(&nowhere), "-o", s(&dir.join("out"))]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("no-such-masks"), "{}", stderr(&o));
+    let masks = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("exemplars/blue-bloom/masks");
+    let o = run(&["synth", "-e", "blue-bloom", "--masks", s(&masks), "-o", s(&dir.join("out")), "--target-scale", "0"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--target-scale 0"), "{}", stderr(&o));
+    assert!(!dir.join("out").join("0001.png").exists(), "nothing written before the error");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -113,6 +113,16 @@ pub enum Part {
 }
 
 impl SynthFlags {
+    /// `--target-scale` (thesis), validated: how `synth` scales the masks it reads (not an
+    /// engine parameter, so not in [`Params`]; `render` and `quality` scale with `--scale`).
+    pub fn target_scale(&self) -> Result<f32> {
+        let s = self.target_scale.unwrap_or(1.0);
+        if !(s.is_finite() && s > 0.01 && s <= 16.0) {
+            bail!("--target-scale {s}: expected a number in (0.01, 16]");
+        }
+        Ok(s)
+    }
+
     /// The validated parameters.
     pub fn params(&self) -> Result<Params> {
         let fit = !self.no_thin_fit && self.blur_sigma.is_none() && self.border_width.is_none();
@@ -165,9 +175,6 @@ impl SynthFlags {
         }
         if let Some(v) = self.src_scale {
             b = b.src_scale(v);
-        }
-        if let Some(v) = self.target_scale {
-            b = b.target_scale(v);
         }
         if let Some(s) = &self.prev_modulation_bounds {
             let v: Vec<f32> = s.split(',').filter_map(|t| t.trim().parse().ok()).collect();

@@ -43,7 +43,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     let t0 = Instant::now();
     let params = args.flags.params()?;
     let exemplar = super::find_exemplar(&args.exemplar, &args.exemplar_dir.dirs)?;
-    let anim = anim::load(&args.masks, &LoadOptions { scale: params.target_scale(), ..Default::default() })
+    let anim = anim::load(&args.masks, &LoadOptions { scale: args.flags.target_scale()?, ..Default::default() })
         .with_context(|| format!("could not read the masks in '{}'", args.masks.display()))?;
     let range = parse_frames(args.frames.as_deref(), anim.frames)?;
     warn_if_clipped(args.frames.as_deref(), &range, anim.frames, "the input");

@@ -32,7 +32,6 @@ pub struct Params {
     pub(crate) levels: Option<usize>,
     pub(crate) src_scale: Option<f32>,
     pub(crate) src_speed: Option<usize>,
-    pub(crate) target_scale: f32,
     pub(crate) direction_rule: bool,
     pub(crate) time_shift: bool,
     pub(crate) advect: bool,
@@ -69,7 +68,6 @@ impl Default for Params {
             levels: None,
             src_scale: None,
             src_speed: None,
-            target_scale: 1.0,
             direction_rule: true,
             time_shift: true,
             advect: true,
@@ -176,10 +174,6 @@ impl Params {
         p
     }
 
-    /// Target scale.
-    pub fn target_scale(&self) -> f32 {
-        self.target_scale
-    }
     /// Exemplar scale, when set explicitly (else the exemplar's recommendation).
     pub fn src_scale(&self) -> Option<f32> {
         self.src_scale
@@ -392,12 +386,6 @@ impl ParamsBuilder {
     /// Default: the exemplar's recommendation (1).
     pub fn src_speed(mut self, s: usize) -> Self {
         self.p.src_speed = Some(s);
-        self
-    }
-
-    /// Target scale (thesis `--target-scale`); the output has the scaled size. Default: 1.
-    pub fn target_scale(mut self, s: f32) -> Self {
-        self.p.target_scale = s;
         self
     }
 
@@ -626,9 +614,6 @@ impl ParamsBuilder {
             && !(1..=1000).contains(&s)
         {
             return Err(Error::param("src-speed", s, "1..=1000"));
-        }
-        if !(p.target_scale.is_finite() && p.target_scale > 0.01 && p.target_scale <= 16.0) {
-            return Err(Error::param("target-scale", p.target_scale, "a number in (0.01, 16]"));
         }
         let g = &p.guide;
         if !(g.blur_sigma.is_finite() && (0.0..=200.0).contains(&g.blur_sigma)) {
