@@ -357,7 +357,7 @@ impl Synthesizer {
     /// `k = min(1, E_S / E_T)` for a target extent scale `E_T` (1 when normalization is off).
     pub(crate) fn extent_factor_for(&self, e_t: f32) -> f32 {
         let e_s = self.source.pyramid.ext_scale;
-        if self.params.ext_normalize && e_t > e_s && e_t > 0.0 { e_s / e_t } else { 1.0 }
+        if self.params.parts.ext_normalize && e_t > e_s && e_t > 0.0 { e_s / e_t } else { 1.0 }
     }
 
     /// Also produce [`DebugViews`] with every frame.
@@ -518,9 +518,9 @@ fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevS
         band: src.border_width,
         step_cost: shift::step_cost(src.ext_scale, src.levels[0].frames),
         active: &active,
-        time_shift: p.time_shift,
-        advect: p.advect,
-        settle: p.settle,
+        time_shift: p.parts.time_shift,
+        advect: p.parts.advect,
+        settle: p.parts.settle,
     };
     shift::shift_nnf(&inputs, &prev.nnf0)
 }

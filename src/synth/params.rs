@@ -32,19 +32,44 @@ pub struct Params {
     pub(crate) levels: Option<usize>,
     pub(crate) src_scale: Option<f32>,
     pub(crate) src_speed: Option<usize>,
-    pub(crate) direction_rule: bool,
-    pub(crate) time_shift: bool,
-    pub(crate) advect: bool,
-    pub(crate) segments: bool,
-    pub(crate) ext_clamp: bool,
-    pub(crate) ext_normalize: bool,
-    pub(crate) extent_falloff: bool,
-    pub(crate) carried_rim: bool,
-    pub(crate) settle: bool,
-    pub(crate) keep_grain: bool,
+    pub(crate) parts: Parts,
     pub(crate) seed: u64,
     pub(crate) guide: GuideParams,
     pub(crate) fit_thin: bool,
+}
+
+/// The parts of the method that can be switched off, to see what each does (ablations), and
+/// the engine's departures from the paper; every one is on by default. Each has its setter on
+/// [`ParamsBuilder`], where it is documented.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Parts {
+    pub direction_rule: bool,
+    pub time_shift: bool,
+    pub advect: bool,
+    pub segments: bool,
+    pub ext_clamp: bool,
+    pub ext_normalize: bool,
+    pub extent_falloff: bool,
+    pub carried_rim: bool,
+    pub settle: bool,
+    pub keep_grain: bool,
+}
+
+impl Default for Parts {
+    fn default() -> Parts {
+        Parts {
+            direction_rule: true,
+            time_shift: true,
+            advect: true,
+            segments: true,
+            ext_clamp: true,
+            ext_normalize: true,
+            extent_falloff: true,
+            carried_rim: true,
+            settle: true,
+            keep_grain: true,
+        }
+    }
 }
 
 impl Default for Params {
@@ -68,16 +93,7 @@ impl Default for Params {
             levels: None,
             src_scale: None,
             src_speed: None,
-            direction_rule: true,
-            time_shift: true,
-            advect: true,
-            segments: true,
-            ext_clamp: true,
-            ext_normalize: true,
-            extent_falloff: true,
-            carried_rim: true,
-            settle: true,
-            keep_grain: true,
+            parts: Parts::default(),
             seed: 1,
             guide: GuideParams::default(),
             fit_thin: true,
@@ -393,7 +409,7 @@ impl ParamsBuilder {
     /// and target flow. Off = θ = 0 everywhere (the "no direction term" ablation).
     /// Default: on.
     pub fn direction_rule(mut self, on: bool) -> Self {
-        self.p.direction_rule = on;
+        self.p.parts.direction_rule = on;
         self
     }
 
@@ -401,7 +417,7 @@ impl ParamsBuilder {
     /// by the Δi that matches the target's motion. Off = Δi = 0 (the "no time shift" ablation:
     /// the previous frame's matches are reused as they are). Default: on.
     pub fn time_shift(mut self, on: bool) -> Self {
-        self.p.time_shift = on;
+        self.p.parts.time_shift = on;
         self
     }
 
@@ -412,7 +428,7 @@ impl ParamsBuilder {
     /// upstream), and matches in the border band are re-anchored to the target's distance from
     /// the edge. Off = the paper's SHIFTNNF alone. Default: on.
     pub fn advect(mut self, on: bool) -> Self {
-        self.p.advect = on;
+        self.p.parts.advect = on;
         self
     }
 
@@ -426,21 +442,21 @@ impl ParamsBuilder {
     /// 21 % at frame 70). Not in the paper, whose field is not advected. Off = the warped field
     /// as it is. Default: on.
     pub fn settle(mut self, on: bool) -> Self {
-        self.p.settle = on;
+        self.p.parts.settle = on;
         self
     }
 
     /// Restrict matches to the target pixel's segment (border `I^df < 1` / interior, thesis
     /// §3.4). Off = any segment (ablation). Default: on.
     pub fn segments(mut self, on: bool) -> Self {
-        self.p.segments = on;
+        self.p.parts.segments = on;
         self
     }
 
     /// Clamp target motion extents to the exemplar's largest (so long target motions do not
     /// all collapse onto the exemplar's few most-moved pixels). Default: on.
     pub fn ext_clamp(mut self, on: bool) -> Self {
-        self.p.ext_clamp = on;
+        self.p.parts.ext_clamp = on;
         self
     }
 
@@ -448,7 +464,7 @@ impl ParamsBuilder {
     /// ([`super::Synthesizer::set_target_extent`]). Off = raw extents, as in the paper.
     /// Default: on.
     pub fn ext_normalize(mut self, on: bool) -> Self {
-        self.p.ext_normalize = on;
+        self.p.parts.ext_normalize = on;
         self
     }
 
@@ -477,7 +493,7 @@ impl ParamsBuilder {
     ///
     /// Default: on.
     pub fn extent_falloff(mut self, on: bool) -> Self {
-        self.p.extent_falloff = on;
+        self.p.parts.extent_falloff = on;
         self
     }
 
@@ -501,7 +517,7 @@ impl ParamsBuilder {
     ///
     /// Default: on.
     pub fn carried_rim(mut self, on: bool) -> Self {
-        self.p.carried_rim = on;
+        self.p.parts.carried_rim = on;
         self
     }
 
@@ -521,7 +537,7 @@ impl ParamsBuilder {
     /// the blurred estimate and the merge at face value of earlier versions the same flag made
     /// the ellipses boil (up to 1.78), and it was off by default.
     pub fn keep_grain(mut self, on: bool) -> Self {
-        self.p.keep_grain = on;
+        self.p.parts.keep_grain = on;
         self
     }
 

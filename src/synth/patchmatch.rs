@@ -26,7 +26,7 @@ pub(crate) fn rotations(params: &Params, t_dir: Vec2, s_dir: Vec2) -> ([(f32, f3
     if t_dir == Vec2::ZERO || s_dir == Vec2::ZERO {
         return ([(1.0, 0.0, false); 2], 1);
     }
-    if !params.direction_rule {
+    if !params.parts.direction_rule {
         // Ablation: θ = 0; the ext swap still follows the flows' relative direction.
         return ([(1.0, 0.0, t_dir.dot(s_dir) < 0.0); 2], 1);
     }
@@ -125,7 +125,7 @@ impl<'a> Ctx<'a> {
     #[inline]
     pub fn wanted_segment(&self, q: usize) -> Option<usize> {
         let seg = self.tgt.segment(q);
-        if !self.params.segments || self.src.valid[seg].is_empty() { None } else { Some(seg) }
+        if !self.params.parts.segments || self.src.valid[seg].is_empty() { None } else { Some(seg) }
     }
 
     /// The rotations to try for target pixel q and a source pixel with flow direction `s_dir`

@@ -85,7 +85,7 @@ fn level(f: &FrameInputs, l: usize, coarse: Option<Nnf>, st: &mut StageTimes, ou
     let levels = f.pyr.len();
     let sl = &src.levels[l];
     let gl = &f.pyr[l];
-    let ext_cap = p.ext_clamp.then_some(src.ext_max);
+    let ext_cap = p.parts.ext_clamp.then_some(src.ext_max);
     let mut tgt = timed(&mut st.target, || {
         TargetLevel::new(gl, &src.quant, src.border_width, ext_cap, sl.ext_falloff, src.paper)
     });
@@ -117,7 +117,7 @@ fn level(f: &FrameInputs, l: usize, coarse: Option<Nnf>, st: &mut StageTimes, ou
     if l == 0 {
         // The output: bicubic sampling keeps rotated patches sharper than bilinear.
         out.rgb = timed(&mut st.vote, || {
-            if p.keep_grain {
+            if p.parts.keep_grain {
                 vote::vote_grain(sl, &field, src.paper, p.vote_sigma)
             } else {
                 vote::vote_with(sl, &field, src.paper, p.vote_sigma, true)
@@ -218,7 +218,7 @@ fn initial_field(
         };
         let ctx = Ctx::new(sl, tgt, omega, p.w_color, p, lv.keys(0));
         let kappa = if lv.finest_vote_only { p.coherence } else { 1.0 };
-        timed(&mut st.init, || merge(&ctx, &mut up, &pd, kappa, p.carried_rim));
+        timed(&mut st.init, || merge(&ctx, &mut up, &pd, kappa, p.parts.carried_rim));
         out.evaluations += 2 * tgt.active.len() as u64;
     }
     up

@@ -485,10 +485,10 @@ impl SourcePyramid {
                 cur_g = cur_g.iter().map(|g| g.downsample2()).collect();
             }
             let (lw, lh) = cur_rgb[0].size();
-            let falloff = params.extent_falloff && lw.min(lh) >= EXTENT_FALLOFF_MIN_SIDE;
+            let falloff = params.parts.extent_falloff && lw.min(lh) >= EXTENT_FALLOFF_MIN_SIDE;
             let weights = quant.weights(params.w_df, params.w_ext, v);
             let mut level = build_level(&cur_rgb, &cur_g, &quant, weights, border_width, falloff);
-            if l == 0 && params.keep_grain {
+            if l == 0 && params.parts.keep_grain {
                 build_grain(&mut level, &cur_rgb, &cur_g);
             }
             out.push(level);
