@@ -373,7 +373,7 @@ impl Synthesizer {
     fn level_count(&self, w: usize, h: usize) -> usize {
         let src = &self.source.pyramid;
         let auto = level_count(w.min(h).min(src.size.0).min(src.size.1)).min(src.levels.len());
-        self.params.levels.map(|l| l.min(src.levels.len())).unwrap_or(auto).max(1)
+        self.params.schedule.levels.map(|l| l.min(src.levels.len())).unwrap_or(auto).max(1)
     }
 
     /// Synthesizes the next frame from its guides (frames must come in order and all have
@@ -501,7 +501,10 @@ impl Synthesizer {
     /// estimate of each pixel's own match (Params::estimate_sigma) would hold the random
     /// field's mosaic in place.
     fn first_frame_params(&self) -> Params {
-        Params { coherence: 1.0, estimate_sigma: self.params.vote_sigma, ..self.params.clone() }
+        let mut p = self.params.clone();
+        p.weights.coherence = 1.0;
+        p.schedule.estimate_sigma = p.schedule.vote_sigma;
+        p
     }
 }
 

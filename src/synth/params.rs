@@ -15,27 +15,63 @@ pub const HALF: usize = PATCH / 2;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Params {
     pub(crate) border_width: Option<f32>,
-    pub(crate) w_df: f32,
-    pub(crate) w_ext: f32,
-    pub(crate) w_prev: f32,
-    pub(crate) w_color: f32,
-    pub(crate) vote_sigma: f32,
-    pub(crate) estimate_sigma: f32,
-    pub(crate) lambda: f32,
-    pub(crate) coherence: f32,
-    pub(crate) occ_radius: usize,
-    pub(crate) prev_bounds: (f32, f32),
-    pub(crate) alpha: f32,
-    pub(crate) pm_iters: Vec<usize>,
-    pub(crate) opt_iters: Vec<usize>,
-    pub(crate) optimize_finest: bool,
-    pub(crate) levels: Option<usize>,
     pub(crate) src_scale: Option<f32>,
     pub(crate) src_speed: Option<usize>,
+    pub(crate) weights: Weights,
+    pub(crate) schedule: Schedule,
     pub(crate) parts: Parts,
     pub(crate) seed: u64,
     pub(crate) guide: GuideParams,
     pub(crate) fit_thin: bool,
+}
+
+/// The weights of the patch error and of the search (Table 1 and the thesis; each has its
+/// setter on [`ParamsBuilder`], where its default is explained).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Weights {
+    pub w_df: f32,
+    pub w_ext: f32,
+    pub w_prev: f32,
+    pub w_color: f32,
+    pub lambda: f32,
+    pub coherence: f32,
+}
+
+impl Default for Weights {
+    fn default() -> Weights {
+        Weights { w_df: 5.0, w_ext: 0.005, w_prev: 4.0, w_color: 1.0, lambda: 4.0, coherence: 2.0 }
+    }
+}
+
+/// The schedule of the search and of the voting: iterations per level, search radius decay,
+/// the occurrence window, the temporal bounds and the vote kernels (setters on [`ParamsBuilder`]).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Schedule {
+    pub vote_sigma: f32,
+    pub estimate_sigma: f32,
+    pub occ_radius: usize,
+    pub prev_bounds: (f32, f32),
+    pub alpha: f32,
+    pub pm_iters: Vec<usize>,
+    pub opt_iters: Vec<usize>,
+    pub optimize_finest: bool,
+    pub levels: Option<usize>,
+}
+
+impl Default for Schedule {
+    fn default() -> Schedule {
+        Schedule {
+            vote_sigma: 0.7,
+            estimate_sigma: 0.5,
+            occ_radius: 5,
+            prev_bounds: (2.0, 10.0),
+            alpha: 0.75,
+            pm_iters: vec![6, 4],
+            opt_iters: vec![4, 2, 1],
+            optimize_finest: false,
+            levels: None,
+        }
+    }
 }
 
 /// The parts of the method that can be switched off, to see what each does (ablations), and
@@ -76,23 +112,10 @@ impl Default for Params {
     fn default() -> Self {
         Params {
             border_width: None,
-            w_df: 5.0,
-            w_ext: 0.005,
-            w_prev: 4.0,
-            w_color: 1.0,
-            vote_sigma: 0.7,
-            estimate_sigma: 0.5,
-            lambda: 4.0,
-            coherence: 2.0,
-            occ_radius: 5,
-            prev_bounds: (2.0, 10.0),
-            alpha: 0.75,
-            pm_iters: vec![6, 4],
-            opt_iters: vec![4, 2, 1],
-            optimize_finest: false,
-            levels: None,
             src_scale: None,
             src_speed: None,
+            weights: Weights::default(),
+            schedule: Schedule::default(),
             parts: Parts::default(),
             seed: 1,
             guide: GuideParams::default(),
@@ -118,31 +141,31 @@ impl Params {
     }
     /// Weight of the border channel w_df (w^bound).
     pub fn w_df(&self) -> f32 {
-        self.w_df
+        self.weights.w_df
     }
     /// Weight of the motion-extent channels w_ext.
     pub fn w_ext(&self) -> f32 {
-        self.w_ext
+        self.weights.w_ext
     }
     /// Weight of the temporal guide w_prev (w^temp).
     pub fn w_prev(&self) -> f32 {
-        self.w_prev
+        self.weights.w_prev
     }
     /// Uniformity weight λ (w^uni).
     pub fn lambda(&self) -> f32 {
-        self.lambda
+        self.weights.lambda
     }
     /// Coherence factor κ of the random search (a random candidate must be κ× better).
     pub fn coherence(&self) -> f32 {
-        self.coherence
+        self.weights.coherence
     }
     /// Temporal radius r of the occurrence boxes.
     pub fn occ_radius(&self) -> usize {
-        self.occ_radius
+        self.schedule.occ_radius
     }
     /// Bounds (m_l, m_u) of the temporal modulation, pixels.
     pub fn prev_bounds(&self) -> (f32, f32) {
-        self.prev_bounds
+        self.schedule.prev_bounds
     }
     /// The seed.
     pub fn seed(&self) -> u64 {
@@ -205,12 +228,12 @@ impl Params {
 
     /// PatchMatch iterations at pyramid level `l` counted from the coarsest (0 = coarsest).
     pub(crate) fn pm_iters_at(&self, from_coarsest: usize) -> usize {
-        *self.pm_iters.get(from_coarsest).or(self.pm_iters.last()).unwrap_or(&4)
+        *self.schedule.pm_iters.get(from_coarsest).or(self.schedule.pm_iters.last()).unwrap_or(&4)
     }
 
     /// EM (optimize) iterations at pyramid level `l` counted from the coarsest.
     pub(crate) fn opt_iters_at(&self, from_coarsest: usize) -> usize {
-        *self.opt_iters.get(from_coarsest).or(self.opt_iters.last()).unwrap_or(&1)
+        *self.schedule.opt_iters.get(from_coarsest).or(self.schedule.opt_iters.last()).unwrap_or(&1)
     }
 }
 
@@ -233,7 +256,7 @@ impl ParamsBuilder {
     /// Weight w_df of the border channel (thesis `--dist-weight`, paper w^bound).
     /// Default: 5 (thesis; the paper's 4 is with b = 30 px).
     pub fn w_df(mut self, w: f32) -> Self {
-        self.p.w_df = w;
+        self.p.weights.w_df = w;
         self
     }
 
@@ -253,7 +276,7 @@ impl ParamsBuilder {
     /// frame, newly covered pixels; see `synth::patch`): carried paint keeps the age it was
     /// given, and the time shift advances it.
     pub fn w_ext(mut self, w: f32) -> Self {
-        self.p.w_ext = w;
+        self.p.weights.w_ext = w;
         self
     }
 
@@ -261,13 +284,13 @@ impl ParamsBuilder {
     /// Default: 4 (paper Table 1; the thesis's 1 measured a temporal-change ratio of 1.4–1.5 on
     /// a still target against 0.8–0.9 with 4).
     pub fn w_prev(mut self, w: f32) -> Self {
-        self.p.w_prev = w;
+        self.p.weights.w_prev = w;
         self
     }
 
     /// Weight of the color term D^tex; only for ablations (0 disables it). Default: 1.
     pub fn w_color(mut self, w: f32) -> Self {
-        self.p.w_color = w;
+        self.p.weights.w_color = w;
         self
     }
 
@@ -278,7 +301,7 @@ impl ParamsBuilder {
     /// contrast ratio 0.84 vs 0.62 on the growing test target, 0.73 vs 0.54 on the sliding one;
     /// smaller σ approaches copying patch centers and starts to flicker).
     pub fn vote_sigma(mut self, s: f32) -> Self {
-        self.p.vote_sigma = s;
+        self.p.schedule.vote_sigma = s;
         self
     }
 
@@ -301,7 +324,7 @@ impl ParamsBuilder {
     /// from a random field, whose own mosaic would hold the search in place (at 0.35 the
     /// identity of ink-rims fell to 7 dB on its first frame). Default: 0.5.
     pub fn estimate_sigma(mut self, s: f32) -> Self {
-        self.p.estimate_sigma = s;
+        self.p.schedule.estimate_sigma = s;
         self
     }
 
@@ -312,7 +335,7 @@ impl ParamsBuilder {
     /// little (edge darkening 0.50–0.86 against 0.57–0.86, incoherent change 0.98–1.13
     /// against 0.94–1.04).
     pub fn lambda(mut self, l: f32) -> Self {
-        self.p.lambda = l;
+        self.p.weights.lambda = l;
         self
     }
 
@@ -320,7 +343,7 @@ impl ParamsBuilder {
     /// Default: 5 (paper Table 1; the thesis's 10 covers most of a 20–30 frame exemplar, which
     /// makes the penalty nearly frame-blind).
     pub fn occ_radius(mut self, r: usize) -> Self {
-        self.p.occ_radius = r;
+        self.p.schedule.occ_radius = r;
         self
     }
 
@@ -329,7 +352,7 @@ impl ParamsBuilder {
     /// `--prev-modulation-bounds 10,2`, given there as (m_u, m_l)). Distances are compared after
     /// clamping both to b, as the thesis compares `I^df`. Default: (2, 10).
     pub fn prev_bounds(mut self, m_l: f32, m_u: f32) -> Self {
-        self.p.prev_bounds = (m_l, m_u);
+        self.p.schedule.prev_bounds = (m_l, m_u);
         self
     }
 
@@ -355,40 +378,40 @@ impl ParamsBuilder {
     ///
     /// Default: 2; 1 = plain PatchMatch and the paper's merge.
     pub fn coherence(mut self, k: f32) -> Self {
-        self.p.coherence = k;
+        self.p.weights.coherence = k;
         self
     }
 
     /// PatchMatch random-search shrink factor α (thesis `--patchmatch-alpha`). Default: 0.75.
     pub fn alpha(mut self, a: f32) -> Self {
-        self.p.alpha = a;
+        self.p.schedule.alpha = a;
         self
     }
 
     /// PatchMatch iterations per level, coarsest first; the last repeats
     /// (thesis `--patchmatch-iterations`). Default: [6, 4] (thesis §4.4.3).
     pub fn pm_iters(mut self, v: Vec<usize>) -> Self {
-        self.p.pm_iters = v;
+        self.p.schedule.pm_iters = v;
         self
     }
 
     /// EM iterations per level, coarsest first; the last repeats (thesis `--opt-iterations`).
     /// Default: [4, 2, 1] (thesis §4.4.3 table).
     pub fn opt_iters(mut self, v: Vec<usize>) -> Self {
-        self.p.opt_iters = v;
+        self.p.schedule.opt_iters = v;
         self
     }
 
     /// Also optimize the finest pyramid level instead of only voting the up-scaled field
     /// (thesis §4.4.3 skips it). Default: false.
     pub fn optimize_finest(mut self, on: bool) -> Self {
-        self.p.optimize_finest = on;
+        self.p.schedule.optimize_finest = on;
         self
     }
 
     /// Number of pyramid levels. Default: ⌊log2(d_min / n)⌋ (paper §3.6).
     pub fn levels(mut self, l: usize) -> Self {
-        self.p.levels = Some(l);
+        self.p.schedule.levels = Some(l);
         self
     }
 
@@ -578,36 +601,36 @@ impl ParamsBuilder {
         let finite_nonneg = |name: &str, v: f32| {
             if v.is_finite() && v >= 0.0 { Ok(()) } else { Err(Error::param(name, v, "a finite number >= 0")) }
         };
-        finite_nonneg("dist-weight", p.w_df)?;
-        finite_nonneg("flow-weight", p.w_ext)?;
-        finite_nonneg("prev-weight", p.w_prev)?;
-        finite_nonneg("color-weight", p.w_color)?;
-        if !(p.vote_sigma.is_finite() && (0.0..=10.0).contains(&p.vote_sigma)) {
-            return Err(Error::param("vote-sigma", p.vote_sigma, "0..=10 pixels"));
+        finite_nonneg("dist-weight", p.weights.w_df)?;
+        finite_nonneg("flow-weight", p.weights.w_ext)?;
+        finite_nonneg("prev-weight", p.weights.w_prev)?;
+        finite_nonneg("color-weight", p.weights.w_color)?;
+        if !(p.schedule.vote_sigma.is_finite() && (0.0..=10.0).contains(&p.schedule.vote_sigma)) {
+            return Err(Error::param("vote-sigma", p.schedule.vote_sigma, "0..=10 pixels"));
         }
-        if !(p.estimate_sigma.is_finite() && (0.0..=10.0).contains(&p.estimate_sigma)) {
-            return Err(Error::param("estimate-sigma", p.estimate_sigma, "0..=10 pixels"));
+        if !(p.schedule.estimate_sigma.is_finite() && (0.0..=10.0).contains(&p.schedule.estimate_sigma)) {
+            return Err(Error::param("estimate-sigma", p.schedule.estimate_sigma, "0..=10 pixels"));
         }
-        finite_nonneg("lambda", p.lambda)?;
-        if !(p.coherence.is_finite() && (1.0..=100.0).contains(&p.coherence)) {
-            return Err(Error::param("coherence", p.coherence, "a number in 1..=100 (1 = plain PatchMatch)"));
+        finite_nonneg("lambda", p.weights.lambda)?;
+        if !(p.weights.coherence.is_finite() && (1.0..=100.0).contains(&p.weights.coherence)) {
+            return Err(Error::param("coherence", p.weights.coherence, "a number in 1..=100 (1 = plain PatchMatch)"));
         }
         if let Some(b) = p.border_width
             && !(b.is_finite() && b > 0.0 && b <= 10_000.0)
         {
             return Err(Error::param("border-width", b, "a number of pixels in (0, 10000]"));
         }
-        if p.occ_radius > 1000 {
-            return Err(Error::param("occ-radius", p.occ_radius, "0..=1000 frames"));
+        if p.schedule.occ_radius > 1000 {
+            return Err(Error::param("occ-radius", p.schedule.occ_radius, "0..=1000 frames"));
         }
-        let (ml, mu) = p.prev_bounds;
+        let (ml, mu) = p.schedule.prev_bounds;
         if !(ml.is_finite() && mu.is_finite() && ml >= 0.0 && mu > ml) {
             return Err(Error::param("prev-modulation-bounds", format!("{},{}", ml, mu), "0 <= m_l < m_u (pixels)"));
         }
-        if !(p.alpha > 0.0 && p.alpha < 1.0) {
-            return Err(Error::param("patchmatch-alpha", p.alpha, "a number in (0, 1)"));
+        if !(p.schedule.alpha > 0.0 && p.schedule.alpha < 1.0) {
+            return Err(Error::param("patchmatch-alpha", p.schedule.alpha, "a number in (0, 1)"));
         }
-        for (name, v) in [("patchmatch-iterations", &p.pm_iters), ("opt-iterations", &p.opt_iters)] {
+        for (name, v) in [("patchmatch-iterations", &p.schedule.pm_iters), ("opt-iterations", &p.schedule.opt_iters)] {
             if v.is_empty() || v.iter().any(|&n| n > 1000) {
                 return Err(Error::param(
                     name,
@@ -616,7 +639,7 @@ impl ParamsBuilder {
                 ));
             }
         }
-        if let Some(l) = p.levels
+        if let Some(l) = p.schedule.levels
             && !(1..=16).contains(&l)
         {
             return Err(Error::param("levels", l, "1..=16"));

@@ -691,7 +691,7 @@ mod terms {
             }
             edit(&mut tgt);
             let feat = src.feat.clone();
-            let q = Query { tq: tgt.pindex(20, 20), w_col: 1.0, mw: params.w_prev, w_om: 0.0 };
+            let q = Query { tq: tgt.pindex(20, 20), w_col: 1.0, mw: params.weights.w_prev, w_om: 0.0 };
             patch_error(src, &feat, &Window::new(src, &tgt, &q), at(1, 20.0, 20.0, 1.0, 0.0), false, f32::INFINITY)
         };
         let shift_lane = |lane: usize, by: f32| {

@@ -108,7 +108,7 @@ impl<'a> Ctx<'a> {
             Some((feat, w)) => (feat, w),
             None => (&src.feat[..], 0.0),
         };
-        let (radii, draws) = search_radii(src, params.alpha);
+        let (radii, draws) = search_radii(src, params.schedule.alpha);
         Ctx { src, tgt, feat, w_om, w_col, params, keys, radii, draws }
     }
 
@@ -237,7 +237,7 @@ impl<'a> Ctx<'a> {
             Some(f) => ([self.rotation_like(q, s_dir, f); 2], 1),
             None => self.rotations(q, s_dir),
         };
-        let coh = if like.is_none() { self.params.coherence } else { 1.0 };
+        let coh = if like.is_none() { self.params.weights.coherence } else { 1.0 };
         let keep = |best: &mut Match, (c, s, flip): (f32, f32, bool), e: f32| {
             if e * coh < best.err {
                 *best = Match { x, y, c, s, err: e, i: i as u16, flip, ok: true };

@@ -97,7 +97,7 @@ fn level(f: &FrameInputs, l: usize, coarse: Option<Nnf>, st: &mut StageTimes, ou
         frame: f.frame,
         level: l,
         from_coarsest: levels - 1 - l,
-        finest_vote_only: l == 0 && levels > 1 && !p.optimize_finest,
+        finest_vote_only: l == 0 && levels > 1 && !p.schedule.optimize_finest,
         paper: src.paper,
         size: gl.mask.size(),
     };
@@ -107,8 +107,8 @@ fn level(f: &FrameInputs, l: usize, coarse: Option<Nnf>, st: &mut StageTimes, ou
     if !lv.finest_vote_only {
         optimize(&lv, &mut tgt, &mut field, &mut occ, st, out);
         if f.debug {
-            let counts = occurrence::counts(sl, &field, &tgt, p.occ_radius);
-            let norm = ((PATCH * PATCH) * (2 * p.occ_radius + 1)) as f32;
+            let counts = occurrence::counts(sl, &field, &tgt, p.schedule.occ_radius);
+            let norm = ((PATCH * PATCH) * (2 * p.schedule.occ_radius + 1)) as f32;
             out.omega = Some(Plane::from_fn(sl.w, sl.h, |x, y| {
                 (0..sl.frames).map(|i| counts[sl.index(i, x, y)] as f32).sum::<f32>() / norm
             }));
@@ -118,9 +118,9 @@ fn level(f: &FrameInputs, l: usize, coarse: Option<Nnf>, st: &mut StageTimes, ou
         // The output: bicubic sampling keeps rotated patches sharper than bilinear.
         out.rgb = timed(&mut st.vote, || {
             if p.parts.keep_grain {
-                vote::vote_grain(sl, &field, src.paper, p.vote_sigma)
+                vote::vote_grain(sl, &field, src.paper, p.schedule.vote_sigma)
             } else {
-                vote::vote_with(sl, &field, src.paper, p.vote_sigma, true)
+                vote::vote_with(sl, &field, src.paper, p.schedule.vote_sigma, true)
             }
         });
     }
@@ -152,7 +152,7 @@ impl Level<'_> {
 
     /// The estimate the search matches against, voted from `field`.
     fn estimate(&self, field: &Nnf, st: &mut StageTimes) -> Vec<Rgb> {
-        timed(&mut st.vote, || vote::vote(self.src, field, self.paper, self.params.estimate_sigma))
+        timed(&mut st.vote, || vote::vote(self.src, field, self.paper, self.params.schedule.estimate_sigma))
     }
 }
 
@@ -165,10 +165,10 @@ fn temporal_guide(f: &FrameInputs, l: usize, tgt: &mut TargetLevel, st: &mut Sta
     let sl = &src.levels[l];
     let (lw, lh) = f.pyr[l].mask.size();
     let sd = timed(&mut st.shift, || shifted.downscale(l, lw, lh));
-    let voted = timed(&mut st.vote, || vote::vote(sl, &sd, src.paper, p.estimate_sigma));
+    let voted = timed(&mut st.vote, || vote::vote(sl, &sd, src.paper, p.schedule.estimate_sigma));
     write_lanes(tgt, &voted, false);
     timed(&mut st.shift, || {
-        shift::fill_modulation(tgt, sl, &sd, &prev_masks[l], src.border_width, p.prev_bounds, p.w_prev)
+        shift::fill_modulation(tgt, sl, &sd, &prev_masks[l], src.border_width, p.schedule.prev_bounds, p.weights.w_prev)
     });
     Some(sd)
 }
@@ -214,10 +214,10 @@ fn initial_field(
         let omega = if lv.finest_vote_only {
             None
         } else {
-            timed(&mut st.occurrence, || occ.update(sl, &up, tgt, p.occ_radius, p.lambda))
+            timed(&mut st.occurrence, || occ.update(sl, &up, tgt, p.schedule.occ_radius, p.weights.lambda))
         };
-        let ctx = Ctx::new(sl, tgt, omega, p.w_color, p, lv.keys(0));
-        let kappa = if lv.finest_vote_only { p.coherence } else { 1.0 };
+        let ctx = Ctx::new(sl, tgt, omega, p.weights.w_color, p, lv.keys(0));
+        let kappa = if lv.finest_vote_only { p.weights.coherence } else { 1.0 };
         timed(&mut st.init, || merge(&ctx, &mut up, &pd, kappa, p.parts.carried_rim));
         out.evaluations += 2 * tgt.active.len() as u64;
     }
@@ -240,8 +240,9 @@ fn optimize(
     write_lanes(tgt, &voted, true);
     for opt in 0..p.opt_iters_at(lv.from_coarsest) {
         for it in 0..p.pm_iters_at(lv.from_coarsest) {
-            let omega = timed(&mut st.occurrence, || occ.update(sl, field, tgt, p.occ_radius, p.lambda));
-            let ctx = Ctx::new(sl, tgt, omega, p.w_color, p, lv.keys(opt as u64));
+            let omega =
+                timed(&mut st.occurrence, || occ.update(sl, field, tgt, p.schedule.occ_radius, p.weights.lambda));
+            let ctx = Ctx::new(sl, tgt, omega, p.weights.w_color, p, lv.keys(opt as u64));
             let (stats, e) = timed(&mut st.patchmatch, || patchmatch::sweep(&ctx, field, it));
             out.energy.push((l, e));
             out.evaluations += stats.evaluations;

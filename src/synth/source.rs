@@ -486,7 +486,7 @@ impl SourcePyramid {
             }
             let (lw, lh) = cur_rgb[0].size();
             let falloff = params.parts.extent_falloff && lw.min(lh) >= EXTENT_FALLOFF_MIN_SIDE;
-            let weights = quant.weights(params.w_df, params.w_ext, v);
+            let weights = quant.weights(params.weights.w_df, params.weights.w_ext, v);
             let mut level = build_level(&cur_rgb, &cur_g, &quant, weights, border_width, falloff);
             if l == 0 && params.parts.keep_grain {
                 build_grain(&mut level, &cur_rgb, &cur_g);
