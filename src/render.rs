@@ -471,64 +471,23 @@ pub fn render_with(
 ) -> Result<RenderSummary> {
     let start = Instant::now();
     let range = frame_range(anim, opts)?;
-    let (w, h) = (anim.width as usize, anim.height as usize);
     let background = background(anim, opts)?;
-    let Prepared { styles_of, region_style, styles } = prepare(anim, opts, &range, None, cache)?;
-
-    // Resume: check that there is something to continue, made with the same options, before
-    // anything is created or computed.
+    let prepared = prepare(anim, opts, &range, None, cache)?;
     let n = range.len();
-    let input = resume::input_digest(&anim.path)?;
-    let fingerprint = resume::fingerprint(&format!(
-        "{}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{}|{}|{:?}|{}",
-        input,
-        range,
-        styles_of,
-        opts.recolor,
-        opts.strokes,
-        opts.background,
-        opts.params,
-        opts.scale,
-        w * 100_000 + h,
-        styles.iter().map(|s| s.source.frames()).collect::<Vec<_>>(),
-        opts.keep_layers,
-    ));
-    let resumed =
-        if opts.resume { Some(Journal::open(&opts.out_dir, fingerprint, n, Remedy::RenderAgain)?) } else { None };
-    // The frames already written must be the ones recorded; the engine's state before the
-    // first damaged one is gone, so a damaged frame means rendering again from the start.
-    let resumed = resumed.filter(|(journal, _)| verified(journal, "rendering again from the start"));
-    let done = resumed.as_ref().map_or(0, |(_, done)| *done);
-
-    // Output locations, checked before the work starts.
+    // Resume: check that there is something to continue, made with the same options, before
+    // anything is created or computed; then the output locations, checked before the work.
+    let fingerprint = render_fingerprint(anim, opts, &range, &prepared)?;
+    let (resumed, done) = open_journal(opts, fingerprint, n)?;
     let layer_dirs = prepare_outputs(anim, opts)?;
     output::remove_stale_temporaries(&opts.out_dir.join(STATE_DIR), None);
-    // Resumable from the start: an interruption before the first frame resumes too.
     let mut journal = match resumed {
-        Some((journal, _)) => journal,
+        Some(journal) => journal,
+        // Resumable from the start: an interruption before the first frame resumes too.
         None => Journal::create(&opts.out_dir, fingerprint, n, Remedy::RenderAgain)?,
     };
 
-    // Per-layer synthesizers and guide streams (the guides' backward pass runs here).
-    let total_stage = "frames";
-    let mut layers: Vec<Layer> = (0..anim.regions.len())
-        .into_par_iter()
-        .map(|region| -> Result<Layer> {
-            let style = region_style[region];
-            let (synth, guides) = match style {
-                // Nothing left to synthesize when every frame was done (only the GIF was missing).
-                Some(s) if done < n => {
-                    let st = &styles[s];
-                    let (synth, stream) = start_layer(anim, opts, region, &range, st)?;
-                    (Some(synth), Some(stream))
-                }
-                _ => (None, None),
-            };
-            Ok(Layer { region, style, synth, guides, seconds: 0.0, kept: Vec::new() })
-        })
-        .collect::<Result<_>>()?;
-
     let stages: Vec<String> = (0..anim.regions.len()).map(|r| stage_name(anim, r)).collect();
+    let mut layers = start_layers(anim, opts, &range, &prepared, done)?;
     if done > 0 {
         restore(&journal, done, &mut layers, &stages)?;
     }
@@ -537,7 +496,7 @@ pub fn render_with(
             return Err(Error::Cancelled);
         }
     }
-    if !progress.update(total_stage, done, n) {
+    if !progress.update(TOTAL_STAGE, done, n) {
         return Err(Error::Cancelled);
     }
     let mut written = 0usize;
@@ -546,37 +505,15 @@ pub fn render_with(
         let results: Vec<(Option<StylizedLayer>, RegionFrame)> = layers
             .par_iter_mut()
             .zip(&stages)
-            .map(|(l, stage)| -> Result<(Option<StylizedLayer>, RegionFrame)> {
+            .map(|(l, stage)| {
                 let rf = anim.render(l.region, frame)?;
-                let (Some(synth), Some(guides), Some(s)) = (l.synth.as_mut(), l.guides.as_mut(), l.style) else {
-                    return Ok((None, rf));
-                };
-                let t0 = Instant::now();
-                let out = next_frame(anim, synth, guides, frame)?;
-                let layer =
-                    recolor_paint(&paint::Paint::from_frame(&out.rgb, &out.mask), &rf, &styles[s].pigment, opts)?;
-                l.seconds += t0.elapsed().as_secs_f64();
+                let layer = paint_layer(anim, opts, &prepared.styles, l, &rf, frame)?;
                 // This layer's bar moves as soon as its frame is done; the frame is only
                 // written (and the state saved) once every layer has it.
-                if !progress.update(stage, k + 1, n) {
+                if layer.is_some() && !progress.update(stage, k + 1, n) {
                     return Err(Error::Cancelled);
                 }
-                if opts.eval {
-                    let flat = target_fill(&rf, opts.strokes);
-                    let rgba: Vec<u8> = out
-                        .rgb
-                        .data()
-                        .iter()
-                        .zip(out.mask.data())
-                        .flat_map(|(c, &m)| {
-                            let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
-                            [q(c[0]), q(c[1]), q(c[2]), if m { 255 } else { 0 }]
-                        })
-                        .collect();
-                    let cov: Vec<u8> = flat.data().iter().map(|c| (c[3].clamp(0.0, 1.0) * 255.0 + 0.5) as u8).collect();
-                    l.kept.push((rgba, cov));
-                }
-                Ok((Some(layer), rf))
+                Ok((layer, rf))
             })
             .collect::<Result<_>>()?;
         for path in write_composite(anim, opts, &background, frame, &results, &layer_dirs)? {
@@ -584,7 +521,7 @@ pub fn render_with(
         }
         journal.commit(k + 1, &layer_states(&layers, &stages))?;
         written += 1;
-        if !progress.update(total_stage, k + 1, n) {
+        if !progress.update(TOTAL_STAGE, k + 1, n) {
             return Err(Error::Cancelled);
         }
     }
@@ -593,30 +530,130 @@ pub fn render_with(
     // The progress file and the frames log stay (they say the render is complete and what it
     // wrote, for a later --resume).
     journal.finish();
-
-    let mut summaries = Vec::with_capacity(layers.len());
-    for l in &layers {
-        let r = &anim.regions[l.region];
-        let report = match (opts.eval, l.style) {
-            (true, Some(s)) if !l.kept.is_empty() => Some(evaluate_layer(l, &styles[s], w, h)?),
-            _ => None,
-        };
-        summaries.push(LayerSummary {
-            index: r.index,
-            name: r.name.clone(),
-            exemplar: l.style.map(|s| styles[s].name.clone()),
-            seconds: l.seconds,
-            eval: report,
-        });
-    }
     Ok(RenderSummary {
         frames: written,
         resumed: done,
         seconds: start.elapsed().as_secs_f64(),
         frame_dir: opts.out_dir.clone(),
         gif: opts.gif.clone(),
-        layers: summaries,
+        layers: summarize(anim, opts, &prepared.styles, &layers)?,
     })
+}
+
+/// The progress stage of the whole render (one step per frame written).
+const TOTAL_STAGE: &str = "frames";
+
+/// What a render's state must match to be resumed: the input's content and every option that
+/// changes the output.
+fn render_fingerprint(anim: &Animation, opts: &RenderOptions, range: &Range<usize>, p: &Prepared) -> Result<u64> {
+    let input = resume::input_digest(&anim.path)?;
+    let (w, h) = (anim.width as usize, anim.height as usize);
+    Ok(resume::fingerprint(&format!(
+        "{}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{}|{}|{:?}|{}",
+        input,
+        range,
+        p.styles_of,
+        opts.recolor,
+        opts.strokes,
+        opts.background,
+        opts.params,
+        opts.scale,
+        w * 100_000 + h,
+        p.styles.iter().map(|s| s.source.frames()).collect::<Vec<_>>(),
+        opts.keep_layers,
+    )))
+}
+
+/// With `--resume`, the journal of the render to continue (made with the same `fingerprint`)
+/// and how many frames it has done. The frames already written must be the ones recorded; the
+/// engine's state before the first damaged one is gone, so a damaged frame means rendering
+/// again from the start (`None`).
+fn open_journal(opts: &RenderOptions, fingerprint: u64, frames: usize) -> Result<(Option<Journal>, usize)> {
+    if !opts.resume {
+        return Ok((None, 0));
+    }
+    let (journal, done) = Journal::open(&opts.out_dir, fingerprint, frames, Remedy::RenderAgain)?;
+    Ok(if verified(&journal, "rendering again from the start") { (Some(journal), done) } else { (None, 0) })
+}
+
+/// Per-layer synthesizers and guide streams (the guides' backward pass runs here), in
+/// parallel over the layers; none where a layer is flat or every frame was done already (only
+/// the GIF was missing).
+fn start_layers(
+    anim: &Animation,
+    opts: &RenderOptions,
+    range: &Range<usize>,
+    p: &Prepared,
+    done: usize,
+) -> Result<Vec<Layer>> {
+    (0..anim.regions.len())
+        .into_par_iter()
+        .map(|region| -> Result<Layer> {
+            let style = p.region_style[region];
+            let (synth, guides) = match style {
+                Some(s) if done < range.len() => {
+                    let (synth, stream) = start_layer(anim, opts, region, range, &p.styles[s])?;
+                    (Some(synth), Some(stream))
+                }
+                _ => (None, None),
+            };
+            Ok(Layer { region, style, synth, guides, seconds: 0.0, kept: Vec::new() })
+        })
+        .collect()
+}
+
+/// Synthesizes and recolors layer `l`'s frame `frame` (`rf`, the region's frame); `None` for
+/// a flat layer. With `eval`, keeps the exemplar-colored frame and the target's coverage.
+fn paint_layer(
+    anim: &Animation,
+    opts: &RenderOptions,
+    styles: &[Style],
+    l: &mut Layer,
+    rf: &RegionFrame,
+    frame: usize,
+) -> Result<Option<StylizedLayer>> {
+    let (Some(synth), Some(guides), Some(s)) = (l.synth.as_mut(), l.guides.as_mut(), l.style) else {
+        return Ok(None);
+    };
+    let t0 = Instant::now();
+    let out = next_frame(anim, synth, guides, frame)?;
+    let layer = recolor_paint(&paint::Paint::from_frame(&out.rgb, &out.mask), rf, &styles[s].pigment, opts)?;
+    l.seconds += t0.elapsed().as_secs_f64();
+    if opts.eval {
+        let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
+        let rgba: Vec<u8> = out
+            .rgb
+            .data()
+            .iter()
+            .zip(out.mask.data())
+            .flat_map(|(c, &m)| [q(c[0]), q(c[1]), q(c[2]), if m { 255 } else { 0 }])
+            .collect();
+        let cov: Vec<u8> = target_fill(rf, opts.strokes).data().iter().map(|c| q(c[3])).collect();
+        l.kept.push((rgba, cov));
+    }
+    Ok(Some(layer))
+}
+
+/// Each layer's summary: its style, time, and with `eval` its measures.
+fn summarize(anim: &Animation, opts: &RenderOptions, styles: &[Style], layers: &[Layer]) -> Result<Vec<LayerSummary>> {
+    let (w, h) = (anim.width as usize, anim.height as usize);
+    layers
+        .iter()
+        .map(|l| {
+            let r = &anim.regions[l.region];
+            let eval = match (opts.eval, l.style) {
+                (true, Some(s)) if !l.kept.is_empty() => Some(evaluate_layer(l, &styles[s], w, h)?),
+                _ => None,
+            };
+            Ok(LayerSummary {
+                index: r.index,
+                name: r.name.clone(),
+                exemplar: l.style.map(|s| styles[s].name.clone()),
+                seconds: l.seconds,
+                eval,
+            })
+        })
+        .collect()
 }
 
 /// The synthesizer and guide stream of one stylized region over `range`.
@@ -627,16 +664,13 @@ fn start_layer(
     range: &Range<usize>,
     style: &Style,
 ) -> Result<(Synthesizer, GuideStream)> {
-    let first = range.start;
-    let strokes = opts.strokes;
-    let stream = GuideStream::new(
+    let (first, strokes) = (range.start, opts.strokes);
+    crate::synth::start(
+        || Ok(style.source.clone()),
+        &style.params,
         range.len(),
         |k| Ok(target_fill(&anim.render(region, first + k)?, strokes).map(|c| c[3])),
-        style.params.guide(),
-    )?;
-    let mut synth = Synthesizer::new(style.source.clone(), style.params.clone())?;
-    synth.set_target_extent(stream.extent_scale());
-    Ok((synth, stream))
+    )
 }
 
 /// Synthesizes the next frame (animation frame `frame`) of a layer.

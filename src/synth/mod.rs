@@ -99,9 +99,10 @@ pub fn sequence_thickness(frames: usize, mut coverage: impl FnMut(usize) -> Resu
 }
 
 /// The synthesizer and the target's guide stream of one layer, ready for its first frame —
-/// the pipeline `synth` and the quality suite share: the exemplar prepared (`prepare`, e.g.
-/// [`Source::prepare`] or a cached source), the stream's backward pass over the target's
-/// `frames` coverages, and the synthesizer given the target's extent scale.
+/// the pipeline that `synth`, `render`'s layers and the quality suite share: the exemplar
+/// prepared (`prepare`, e.g. [`Source::prepare`] or a cached source), the stream's backward
+/// pass over the target's `frames` coverages, and the synthesizer given the target's extent
+/// scale.
 ///
 /// The two are run one after the other. Run side by side (measured on the horse-like
 /// workload, 12 frames of 1000×800, 2 threads) they saved 2 % of the wall time and raised the
