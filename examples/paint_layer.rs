@@ -4,7 +4,8 @@
 //! `cargo run --release --example paint_layer [-- OUT_DIR]` (default `out/paint_layer`).
 
 use fluidymation::img::{self, Plane};
-use fluidymation::{anim, exemplar, guide::GuideStream, synth::Params, synth::Source, synth::Synthesizer};
+use fluidymation::synth::{self, Params, Source};
+use fluidymation::{anim, exemplar};
 use std::path::PathBuf;
 
 fn main() -> fluidymation::Result<()> {
@@ -15,9 +16,11 @@ fn main() -> fluidymation::Result<()> {
     let dress = anim.find_region("dress")?;
     let ex = exemplar::find("blue-bloom", &exemplar::SearchPath::standard(&[]))?;
     let params = Params::builder().seed(7).lambda(4.0).build()?;
-    let mut synth = Synthesizer::new(Source::prepare(&ex, &params)?, params.clone())?;
     let frames = 12.min(anim.frames);
-    let masks = GuideStream::new(frames, |i| Ok(anim.render(dress, i)?.coverage()), params.guide())?;
+    // The exemplar prepared, the target's guides (their backward pass runs here) and the
+    // synthesizer given the target's extent scale.
+    let (mut synth, masks) =
+        synth::start(|| Source::prepare(&ex, &params), &params, frames, |i| Ok(anim.render(dress, i)?.coverage()))?;
     for (k, g) in masks.enumerate() {
         // T^rgb in the exemplar's colors; alpha = the target mask.
         let frame = synth.step(&g?)?;
