@@ -284,7 +284,6 @@ pub fn warn_if_clipped(spec: Option<&str>, range: &std::ops::Range<usize>, total
     }
 }
 
-/// Sets the global thread count.
 /// `--threads`, the same on every command that computes.
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct Threads {
@@ -294,9 +293,15 @@ pub struct Threads {
 }
 
 impl Threads {
-    /// Sizes the global thread pool (see [`set_threads`]).
+    /// Sizes the global thread pool (all cores when not given).
     pub fn apply(&self) -> Result<()> {
-        set_threads(self.n)
+        if let Some(n) = self.n {
+            if n == 0 || n > 1024 {
+                bail!("--threads {}: expected 1..=1024", n);
+            }
+            rayon::ThreadPoolBuilder::new().num_threads(n).build_global().context("could not start the thread pool")?;
+        }
+        Ok(())
     }
 }
 
@@ -307,16 +312,6 @@ pub struct ExemplarDirs {
     /// exemplar folder and the bundled set (repeatable).
     #[arg(long = "exemplar-dir", value_name = "DIR")]
     pub dirs: Vec<std::path::PathBuf>,
-}
-
-pub fn set_threads(threads: Option<usize>) -> Result<()> {
-    if let Some(n) = threads {
-        if n == 0 || n > 1024 {
-            bail!("--threads {}: expected 1..=1024", n);
-        }
-        rayon::ThreadPoolBuilder::new().num_threads(n).build_global().context("could not start the thread pool")?;
-    }
-    Ok(())
 }
 
 #[cfg(test)]

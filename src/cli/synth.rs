@@ -64,16 +64,15 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     };
     let read = t0.elapsed();
     let t = Instant::now();
-    let masks_anim = &anim;
     let (mut synth, stream) = fluidymation::synth::start(
         || Source::prepare(&exemplar, &params),
         &params,
         anim.frames,
-        |i| Ok(masks_anim.render(0, i)?.coverage()),
+        |i| Ok(anim.render(0, i)?.coverage()),
     )
     .with_context(|| format!("could not prepare exemplar '{}' and the target's guides", exemplar.meta.name))?;
     synth.set_debug(args.debug.is_some());
-    let mut time = Phases { prepare: t.elapsed(), ..Phases::default() };
+    let mut time = Phases { read, prepare: t.elapsed(), ..Phases::default() };
     let start = Instant::now();
     let mut written = 0;
     let mut stream = stream.enumerate();
@@ -121,9 +120,9 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
         );
         let s = |d: Duration| d.as_secs_f64();
         eprintln!(
-            "  reading the masks {:.2} s, preparing the exemplar and the guides' backward pass {:.2} s, target \
+            "  reading the masks and the exemplar {:.2} s, preparing the exemplar and the guides' backward pass {:.2} s, target \
              guides {:.2} s, synthesis {:.2} s, writing {:.2} s",
-            s(read),
+            s(time.read),
             s(time.prepare),
             s(time.guides),
             s(time.synthesis),
@@ -133,9 +132,10 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     Ok(())
 }
 
-/// Where the time of the frame loop goes (reported after the run).
+/// Where the time of a run goes (reported after it).
 #[derive(Default)]
 struct Phases {
+    read: Duration,
     prepare: Duration,
     guides: Duration,
     synthesis: Duration,
