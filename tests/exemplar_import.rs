@@ -52,8 +52,11 @@ fn import_errors_are_clear() {
     std::fs::create_dir_all(&dir).unwrap();
     let blank = fluidymation::img::Plane::filled(40, 40, [0.95f32, 0.94, 0.9]);
     fluidymation::img::save_rgb(&dir.join("a1.png"), &blank).unwrap();
+    // One frame is a still; blank paper has no paint in it, and the error names the file.
     let e = import(&dir, &ImportOptions::default(), &NoProgress).unwrap_err().to_string();
-    assert!(e.contains("at least 2"), "{e}");
+    assert!(e.contains("a1.png") && e.contains("no paint found"), "{e}");
+    let e = import(&dir.join("a1.png"), &ImportOptions::default(), &NoProgress).unwrap_err().to_string();
+    assert!(e.contains("a1.png") && e.contains("no paint found"), "{e}");
     fluidymation::img::save_rgb(&dir.join("a2.png"), &blank).unwrap();
     let e = import(&dir, &ImportOptions::default(), &NoProgress).unwrap_err().to_string();
     assert!(e.contains("a1.png") && e.contains("no paint found"), "{e}");

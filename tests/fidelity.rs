@@ -31,8 +31,11 @@ fn suite(options: SuiteOptions) -> SuiteReport {
 #[test]
 fn identity_gives_back_the_exemplar_at_full_size() {
     let report = suite(SuiteOptions { targets: vec![], identity: true, ..SuiteOptions::default() });
-    assert_eq!(report.rows.len(), 5, "every bundled exemplar");
-    for r in &report.rows {
+    // The bundled still (blue-swatch) has no identity to give back: with one frame there are no
+    // extents, so no guide pins its interior, which is free texture (tests/still_exemplar.rs).
+    let videos: Vec<_> = report.rows.iter().filter(|r| r.exemplar_summary.frames > 1).collect();
+    assert_eq!(videos.len(), 5, "every bundled video exemplar");
+    for r in videos {
         let id = r.identity.as_ref().unwrap();
         let worst = id.psnr.iter().copied().fold(f32::INFINITY, f32::min);
         assert!(worst >= 32.0, "{}: PSNR {worst:.1} dB in frame {}", r.exemplar, id.psnr_min_frame);

@@ -29,7 +29,8 @@ pub enum Command {
     Show(ShowArgs),
     /// Generate a watercolor exemplar by simulation (paint spreading on wet paper).
     Generate(GenerateArgs),
-    /// Import a PNG/JPEG frame sequence of real paint: paper color, masks, metadata.
+    /// Import a PNG/JPEG frame sequence of real paint, or one image (a still: a scanned swatch):
+    /// paper color, masks, metadata.
     Import(ImportArgs),
 }
 
@@ -115,7 +116,8 @@ pub struct GenerateArgs {
 /// Arguments of `exemplar import`.
 #[derive(clap::Args, Debug)]
 pub struct ImportArgs {
-    /// Folder (or glob such as `shots/*.jpg`) of PNG/JPEG frames, in natural order.
+    /// Folder (or glob such as `shots/*.jpg`) of PNG/JPEG frames, in natural order, or one
+    /// PNG/JPEG image: a still exemplar (a swatch of paint on paper, with paper around it).
     pub src: PathBuf,
     /// Name of the new exemplar (its folder name).
     #[arg(long)]

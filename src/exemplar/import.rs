@@ -72,13 +72,15 @@ pub struct MaskReport {
     pub low: f32,
 }
 
-/// Imports the frame sequence `src` (a folder or a glob of PNG/JPEG files, natural order).
-/// Reports progress per frame read (stage `"reading"`).
+/// Imports the frame sequence `src` (a folder or a glob of PNG/JPEG files, natural order), or
+/// one image: a still exemplar ([`is_still_image`]). Reports progress per frame read (stage
+/// `"reading"`).
 pub fn import(src: &Path, opts: &ImportOptions, progress: &dyn Progress) -> Result<Exemplar> {
     super::validate_name(&opts.name)?;
-    let files = crate::seq::list_sequence(src, &["png", "jpg", "jpeg"])?;
-    if files.len() < 2 {
-        return Err(Error::exemplar(src, format!("found {} frame; an exemplar needs at least 2", files.len())));
+    let files =
+        if is_still_image(src) { vec![src.to_path_buf()] } else { crate::seq::list_sequence(src, &IMAGE_EXTENSIONS)? };
+    if files.is_empty() {
+        return Err(Error::exemplar(src, "found no PNG or JPEG frame"));
     }
     if files.len() > super::MAX_FRAMES {
         return Err(Error::Limit {
@@ -108,6 +110,33 @@ pub fn import(src: &Path, opts: &ImportOptions, progress: &dyn Progress) -> Resu
     let mut ex = from_frames(frames, &files, opts)?;
     ex.meta.origin = format!("imported from '{}'", src.display());
     Ok(ex)
+}
+
+/// The image files an exemplar can be imported from.
+const IMAGE_EXTENSIONS: [&str; 3] = ["png", "jpg", "jpeg"];
+
+/// True when `path` is one image file (PNG or JPEG): a still exemplar — one painted image, a
+/// scanned swatch of paint on paper — rather than a frame sequence.
+pub fn is_still_image(path: &Path) -> bool {
+    path.is_file() && path.extension().is_some_and(|e| IMAGE_EXTENSIONS.iter().any(|x| e.eq_ignore_ascii_case(x)))
+}
+
+/// Imports one image as a still exemplar with the default options, named after the file (its
+/// stem, with characters a name cannot hold replaced by `-`): what `--exemplar swatch.png` and
+/// `--style LAYER=swatch.png` load. Its paper color is keyed out into its mask as for footage.
+pub fn still(path: &Path) -> Result<Exemplar> {
+    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let mut name: String = stem
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.') { c } else { '-' })
+        .take(64)
+        .collect();
+    if name.is_empty() || name.starts_with(['.', '-']) {
+        name.insert_str(0, "still");
+        name.truncate(64);
+    }
+    let opts = ImportOptions { name, description: "a still image of paint".into(), ..ImportOptions::default() };
+    import(path, &opts, &crate::progress::NoProgress)
 }
 
 /// Crops and rescales one frame; `path` names it in errors.
@@ -271,7 +300,7 @@ pub fn otsu(values: &[f32], hi: f32) -> f32 {
 /// Extracts the masks of prepared frames (steps 2–5 of the module docs).
 pub fn extract_masks(frames: &[Plane<Rgb>], opts: &ImportOptions) -> Result<(Vec<Plane<f32>>, MaskReport)> {
     let Some(first) = frames.first() else {
-        return Err(Error::param("frames", 0, "at least 2 frames"));
+        return Err(Error::param("frames", 0, "at least one frame"));
     };
     let (w, h) = first.size();
     let paper = estimate_paper(frames);

@@ -188,7 +188,8 @@ pub(crate) fn parse_meta(text: &str, path: &Path) -> Result<ExemplarMeta> {
 
 impl Exemplar {
     /// Loads and validates an exemplar folder: `exemplar.toml` must parse and hold valid
-    /// values, there must be as many masks as frames and at least 2 of each, all images must
+    /// values, there must be as many masks as frames and at least one of each (one: a still
+    /// exemplar), all images must
     /// have the same size (at most [`MAX_SIDE`]) and no mask may be empty. Errors name the
     /// offending file.
     pub fn load(dir: &Path) -> Result<Exemplar> {
@@ -239,8 +240,8 @@ impl Exemplar {
                 format!("{} frames but {} masks; every frame needs a mask", frame_files.len(), mask_files.len()),
             ));
         }
-        if frame_files.len() < 2 {
-            return Err(Error::exemplar(label, "an exemplar needs at least 2 frames"));
+        if frame_files.is_empty() {
+            return Err(Error::exemplar(label, "an exemplar needs at least one frame"));
         }
         let mut frames = Vec::with_capacity(frame_files.len());
         let mut masks = Vec::with_capacity(frame_files.len());
@@ -278,11 +279,11 @@ impl Exemplar {
     pub fn validate(&self) -> Result<()> {
         let label = self.dir.clone().unwrap_or_else(|| PathBuf::from(&self.meta.name));
         validate_meta(&self.meta, &label.join("exemplar.toml"))?;
-        if self.frames.len() < 2 || self.frames.len() != self.masks.len() {
+        if self.frames.is_empty() || self.frames.len() != self.masks.len() {
             return Err(Error::exemplar(
                 &label,
                 format!(
-                    "needs at least 2 frames and one mask per frame ({} frames, {} masks)",
+                    "needs at least one frame and one mask per frame ({} frames, {} masks)",
                     self.frames.len(),
                     self.masks.len()
                 ),

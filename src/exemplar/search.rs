@@ -140,11 +140,15 @@ fn looks_like_path(s: &str) -> bool {
     s.contains('/') || s.contains(std::path::MAIN_SEPARATOR) || s.starts_with('.') || s.starts_with('~')
 }
 
-/// Loads the exemplar `name_or_path`: a folder when it is a path to one (or contains a path
+/// Loads the exemplar `name_or_path`: a still exemplar imported on the fly when it is a PNG or
+/// JPEG file ([`super::import::still`]), a folder when it is a path to one (or contains a path
 /// separator), else the first exemplar of that name in `search`. An unknown name gives
 /// [`Error::UnknownExemplar`] with the names that are available.
 pub fn find(name_or_path: &str, search: &SearchPath) -> Result<Exemplar> {
     let p = Path::new(name_or_path);
+    if super::import::is_still_image(p) {
+        return super::import::still(p);
+    }
     if p.join("exemplar.toml").is_file() || looks_like_path(name_or_path) {
         return Exemplar::load(p);
     }

@@ -40,8 +40,15 @@ fn cells(exemplar: &str, target: &str, frames: usize, s: &Summary, alpha: Option
 
 fn notes(r: &Row) -> String {
     let mut n = Vec::new();
+    let still = r.exemplar_summary.frames == 1;
     if let Some(id) = &r.identity {
         n.push(format!("PSNR median {:.1} dB, min {:.1} (frame {})", id.psnr_median, id.psnr_min, id.psnr_min_frame));
+        if still {
+            n.push("a still's interior is free texture (no guide pins it), so PSNR does not measure it".into());
+        }
+    }
+    if still && let Some(v) = r.summary.incoherent_change {
+        n.push(format!("a still: incoherent change {v:.4} (no exemplar motion to compare with)"));
     }
     if r.fitted {
         n.push(format!("fitted to its thickness: σ {}, b {}", r.blur_sigma, r.border_width));

@@ -133,12 +133,19 @@ pub fn resample_exemplar(ex: &Exemplar, scale: f32, speed: usize) -> (Vec<Plane<
 impl Source {
     /// Prepares an exemplar with `params` (its scale, speed and border width default to the
     /// exemplar's recommendations). Guides are computed after resampling.
+    ///
+    /// An exemplar of one frame is a still (a painted swatch): its paint has no motion, so its
+    /// extents are zero (the target's are scaled to zero with them, `k = E_S/E_T = 0`), the
+    /// patches are not turned (θ = 0 where a flow has no direction), and SHIFTNNF has no
+    /// frame to step to — the residual advection carries all of the target's motion, which
+    /// warps the previous frame's field along the target's flow (Frigo et al. 2017 advect the
+    /// previous stylized frame the same way, Bénard et al. 2013 the previous offsets).
     pub fn prepare(ex: &Exemplar, params: &Params) -> Result<Source> {
         ex.validate()?;
         let scale = params.src_scale.unwrap_or(ex.meta.scale);
         let speed = params.src_speed.unwrap_or(ex.meta.speed).max(1);
         let (frames, masks) = resample_exemplar(ex, scale, speed);
-        if frames.len() < 2 {
+        if frames.len() < 2 && ex.len() >= 2 {
             return Err(Error::param(
                 "src-speed",
                 speed,
@@ -149,15 +156,16 @@ impl Source {
         Self::from_parts(&frames, &guides, params, params.border_width.unwrap_or(params.exemplar_border_width(ex)))
     }
 
-    /// Prepares a source from frames and precomputed guides.
+    /// Prepares a source from frames and precomputed guides (one frame or more; one is a
+    /// still, see [`Source::prepare`]).
     pub fn from_parts(
         frames: &[Plane<Rgb>],
         guides: &[FrameGuides],
         params: &Params,
         border_width: f32,
     ) -> Result<Source> {
-        if frames.len() < 2 || frames.len() != guides.len() {
-            return Err(Error::param("exemplar frames", frames.len(), "at least 2 frames, each with guides"));
+        if frames.is_empty() || frames.len() != guides.len() {
+            return Err(Error::param("exemplar frames", frames.len(), "at least one frame, each with guides"));
         }
         if frames.len() > u16::MAX as usize {
             return Err(Error::param("exemplar frames", frames.len(), "at most 65535"));

@@ -1,0 +1,131 @@
+//! Still exemplars (issue 15, part 1): one painted image — a scanned swatch of paint on paper —
+//! in place of a video of paint. The image is keyed out into its mask as footage is; with one
+//! exemplar frame there is no time shift, and the previous frame's field is carried along the
+//! target's own motion (the residual advection of SHIFTNNF carries all of it), held by the
+//! temporal term where the shape changes.
+
+use fluidymation::exemplar::{self, SearchPath, import};
+use fluidymation::img::{self, Plane};
+use fluidymation::quality::{self, PaintedFrame, Painter, RunSpec, SuiteOptions, SuiteReport, TargetKind};
+use fluidymation::synth::{Source, Synthesizer};
+use fluidymation::{NoProgress, Result};
+
+/// The bundled still swatch's image, written to a temporary folder under `name`.
+fn swatch_file(dir: &std::path::Path, name: &str) -> std::path::PathBuf {
+    let bundled = exemplar::find("blue-swatch", &SearchPath::new().with_bundled(true)).unwrap();
+    let path = dir.join(name);
+    img::save_rgb(&path, &bundled.frames[0]).unwrap();
+    path
+}
+
+fn iou(a: &Plane<f32>, b: &Plane<f32>) -> f32 {
+    let (mut i, mut u) = (0usize, 0usize);
+    for (x, y) in a.data().iter().zip(b.data()) {
+        let (x, y) = (*x >= 0.5, *y >= 0.5);
+        i += (x && y) as usize;
+        u += (x || y) as usize;
+    }
+    i as f32 / u.max(1) as f32
+}
+
+/// An image file given where an exemplar is asked for is a still exemplar: one frame, named after
+/// the file, its paper keyed out into the same mask `exemplar import` gives the image.
+#[test]
+fn one_image_is_a_still_exemplar() {
+    let dir = std::env::temp_dir().join(format!("fm-still-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = swatch_file(&dir, "my swatch.png");
+    let bundled = exemplar::find("blue-swatch", &SearchPath::new().with_bundled(true)).unwrap();
+    let still = exemplar::find(path.to_str().unwrap(), &SearchPath::new()).unwrap();
+    assert_eq!(still.len(), 1);
+    assert_eq!(still.meta.name, "my-swatch");
+    let overlap = iou(&still.masks[0], &bundled.masks[0]);
+    assert!(overlap > 0.99, "mask IoU with the bundled swatch's {overlap}");
+    let opts = import::ImportOptions { name: "swatch".into(), ..Default::default() };
+    let imported = import::import(&path, &opts, &NoProgress).unwrap();
+    assert_eq!(imported.len(), 1);
+    assert_eq!(imported.masks[0].data(), still.masks[0].data());
+    // Blank paper: no paint to key out; the error names the file.
+    let blank = dir.join("blank.png");
+    img::save_rgb(&blank, &Plane::filled(64, 64, [0.95, 0.94, 0.92])).unwrap();
+    let err = exemplar::find(blank.to_str().unwrap(), &SearchPath::new()).unwrap_err().to_string();
+    assert!(err.contains("blank.png") && err.contains("no paint"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Every frame painted on its own (a fresh synthesizer per frame, from its own random field): the
+/// reference the issue measures coherence against.
+struct Independent;
+
+impl Painter for Independent {
+    fn paint(&self, run: &RunSpec<'_>, emit: &mut dyn FnMut(PaintedFrame) -> Result<()>) -> Result<()> {
+        let source = Source::prepare(run.exemplar, run.params)?;
+        let (_, stream) =
+            fluidymation::synth::start(|| Ok(source.clone()), run.params, run.frames, |k| Ok((run.coverage)(k)))?;
+        for g in stream {
+            let mut synth = Synthesizer::new(source.clone(), run.params.clone())?;
+            let out = synth.step(&g?)?;
+            emit(PaintedFrame { rgb: out.rgb, mask: out.mask })?;
+        }
+        Ok(())
+    }
+}
+
+fn moving(painter: &dyn Painter) -> SuiteReport {
+    let options = SuiteOptions {
+        exemplars: vec!["blue-swatch".into()],
+        targets: vec![TargetKind::Growing, TargetKind::Translating, TargetKind::Rotating],
+        identity: false,
+        frames: 24,
+        ..SuiteOptions::default()
+    };
+    let report = quality::run_with(&options, painter, &NoProgress).unwrap();
+    println!("{report}");
+    report
+}
+
+/// The bundled swatch on moving shapes at the size users run (512², 24 frames): the paint is
+/// carried with the shape — its incoherent change is a small part of painting every frame on
+/// its own (the issue's floor: ≤ 0.25×), it moves with the target, and it keeps the swatch's
+/// texture, palette and rim.
+///
+/// Measured (`quality -e blue-swatch --target growing --target translating --target rotating
+/// --frames 24`, and the same runs painted frame by frame): incoherent change 0.0046, 0.0056,
+/// 0.0054 against 0.0236, 0.0255, 0.0271 painted independently (ratios 0.19, 0.22, 0.20);
+/// motion agreement 0.65, 0.60, 0.83; contrast 0.61, 0.71, 0.78; palette 0.067, 0.059, 0.060;
+/// rim 0.51, 0.51, 0.41 of the swatch's. The swatch's broad dark backruns are partly lost (the
+/// output is paler: contrast and rim are below the issue-13 floors of 0.85 and 0.8 here, as
+/// for the video exemplars' moving runs, whose contrast averages 0.82).
+/// Floors: coherence ratio ≤ 0.25 (the issue's), motion ≥ 0.55 (the lowest 0.60 less 0.05),
+/// contrast ≥ 0.55 (0.61 less 0.06), palette ≤ 0.08 (0.067 plus 0.013), rim ≥ 0.35 (0.41 less
+/// 0.06).
+#[test]
+fn a_still_paints_moving_shapes_coherently() {
+    let carried = moving(&quality::Engine::default());
+    let independent = moving(&Independent);
+    let mut failures = Vec::new();
+    for (c, i) in carried.rows.iter().zip(&independent.rows) {
+        assert_eq!(c.target, i.target);
+        let (Some(a), Some(b)) = (c.summary.incoherent_change, i.summary.incoherent_change) else {
+            panic!("{}: no incoherent change measured", c.target);
+        };
+        let s = &c.summary;
+        let t = &c.target;
+        if a > 0.25 * b {
+            failures.push(format!("{t}: incoherent change {a:.4}, painted independently {b:.4} (ratio {:.2})", a / b));
+        }
+        if !s.motion_agreement.is_some_and(|v| v >= 0.55) {
+            failures.push(format!("{t}: motion agreement {:?}", s.motion_agreement));
+        }
+        if !s.contrast_ratio.is_some_and(|v| v >= 0.55) {
+            failures.push(format!("{t}: contrast {:?}", s.contrast_ratio));
+        }
+        if !s.palette_distance_mean.is_some_and(|v| v <= 0.08) {
+            failures.push(format!("{t}: palette {:?}", s.palette_distance_mean));
+        }
+        if !s.edge_darkening_ratio.is_some_and(|v| v >= 0.35) {
+            failures.push(format!("{t}: rim {:?}", s.edge_darkening_ratio));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
