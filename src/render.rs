@@ -52,10 +52,14 @@ use std::time::Instant;
 
 mod batch;
 mod jobs;
+pub mod keys;
 pub mod paint;
 
 pub use batch::{StyleCache, render_batch};
 pub use jobs::{LAYER_MANIFEST, LayerCost, LayerJobSummary, composite, layer_costs, render_layer};
+
+/// The style a layer painted from keyframes is reported with.
+pub const KEYFRAMES_STYLE: &str = "keyframes";
 
 /// The style name that leaves a layer flat.
 pub const NO_STYLE: &str = "none";
@@ -94,6 +98,10 @@ pub struct RenderOptions {
     pub resume: bool,
     /// Measure every stylized layer against its exemplar afterwards ([`eval`]).
     pub eval: bool,
+    /// Painted keyframes: (animation frame, 0-based; the painting's file). The layers a
+    /// painting paints are painted from the paintings in every frame, the others keep their
+    /// style (module [`keys`]).
+    pub keyframes: Vec<(usize, PathBuf)>,
 }
 
 impl RenderOptions {
@@ -114,6 +122,7 @@ impl RenderOptions {
             keep_layers: false,
             resume: false,
             eval: false,
+            keyframes: Vec::new(),
         }
     }
 }
@@ -474,6 +483,7 @@ pub fn render_with(
     let background = background(anim, opts)?;
     let prepared = prepare(anim, opts, &range, None, cache)?;
     let n = range.len();
+    let keyed = keys::paint_regions(anim, opts, &range, &keys::painted_regions(anim, opts, &range, &background)?)?;
     // Resume: check that there is something to continue, made with the same options, before
     // anything is created or computed; then the output locations, checked before the work.
     let fingerprint = render_fingerprint(anim, opts, &range, &prepared)?;
@@ -487,7 +497,7 @@ pub fn render_with(
     };
 
     let stages: Vec<String> = (0..anim.regions.len()).map(|r| stage_name(anim, r)).collect();
-    let mut layers = start_layers(anim, opts, &range, &prepared, done)?;
+    let mut layers = start_layers(anim, opts, &range, &prepared, done, &keyed)?;
     if done > 0 {
         restore(&journal, done, &mut layers, &stages)?;
     }
@@ -507,7 +517,13 @@ pub fn render_with(
             .zip(&stages)
             .map(|(l, stage)| {
                 let rf = anim.render(l.region, frame)?;
-                let layer = paint_layer(anim, opts, &prepared.styles, l, &rf, frame)?;
+                let layer = match &keyed[l.region] {
+                    Some(frames) => {
+                        let (rgb, mask) = frames[k].rgb_mask();
+                        Some(composite::painted(&rgb, &mask)?)
+                    }
+                    None => paint_layer(anim, opts, &prepared.styles, l, &rf, frame)?,
+                };
                 // This layer's bar moves as soon as its frame is done; the frame is only
                 // written (and the state saved) once every layer has it.
                 if layer.is_some() && !progress.update(stage, k + 1, n) {
@@ -536,7 +552,7 @@ pub fn render_with(
         seconds: start.elapsed().as_secs_f64(),
         frame_dir: opts.out_dir.clone(),
         gif: opts.gif.clone(),
-        layers: summarize(anim, opts, &prepared.styles, &layers)?,
+        layers: summarize(anim, opts, &prepared.styles, &layers, &keyed)?,
     })
 }
 
@@ -547,9 +563,11 @@ const TOTAL_STAGE: &str = "frames";
 /// changes the output.
 fn render_fingerprint(anim: &Animation, opts: &RenderOptions, range: &Range<usize>, p: &Prepared) -> Result<u64> {
     let input = resume::input_digest(&anim.path)?;
+    let keys: Vec<(usize, u64)> =
+        opts.keyframes.iter().map(|(f, path)| Ok((*f, resume::input_digest(path)?))).collect::<Result<_>>()?;
     let (w, h) = (anim.width as usize, anim.height as usize);
     Ok(resume::fingerprint(&format!(
-        "{}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{}|{}|{:?}|{}",
+        "{}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{}|{}|{:?}|{}|{:?}",
         input,
         range,
         p.styles_of,
@@ -561,6 +579,7 @@ fn render_fingerprint(anim: &Animation, opts: &RenderOptions, range: &Range<usiz
         w * 100_000 + h,
         p.styles.iter().map(|s| s.source.frames()).collect::<Vec<_>>(),
         opts.keep_layers,
+        keys,
     )))
 }
 
@@ -585,11 +604,13 @@ fn start_layers(
     range: &Range<usize>,
     p: &Prepared,
     done: usize,
+    keyed: &[Option<Vec<paint::Paint>>],
 ) -> Result<Vec<Layer>> {
     (0..anim.regions.len())
         .into_par_iter()
         .map(|region| -> Result<Layer> {
-            let style = p.region_style[region];
+            // Layers painted from keyframes are not synthesized from an exemplar.
+            let style = p.region_style[region].filter(|_| keyed[region].is_none());
             let (synth, guides) = match style {
                 Some(s) if done < range.len() => {
                     let (synth, stream) = start_layer(anim, opts, region, range, &p.styles[s])?;
@@ -635,7 +656,13 @@ fn paint_layer(
 }
 
 /// Each layer's summary: its style, time, and with `eval` its measures.
-fn summarize(anim: &Animation, opts: &RenderOptions, styles: &[Style], layers: &[Layer]) -> Result<Vec<LayerSummary>> {
+fn summarize(
+    anim: &Animation,
+    opts: &RenderOptions,
+    styles: &[Style],
+    layers: &[Layer],
+    keyed: &[Option<Vec<paint::Paint>>],
+) -> Result<Vec<LayerSummary>> {
     let (w, h) = (anim.width as usize, anim.height as usize);
     layers
         .iter()
@@ -648,7 +675,10 @@ fn summarize(anim: &Animation, opts: &RenderOptions, styles: &[Style], layers: &
             Ok(LayerSummary {
                 index: r.index,
                 name: r.name.clone(),
-                exemplar: l.style.map(|s| styles[s].name.clone()),
+                exemplar: match &keyed[l.region] {
+                    Some(_) => Some(KEYFRAMES_STYLE.to_string()),
+                    None => l.style.map(|s| styles[s].name.clone()),
+                },
                 seconds: l.seconds,
                 eval,
             })

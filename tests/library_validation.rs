@@ -44,7 +44,12 @@ fn exemplars_whose_frames_and_masks_disagree_are_errors() {
     refused(&ex, "3 frames, 2 masks");
     let mut ex = exemplar();
     ex.frames.truncate(1);
-    refused(&ex, "at least 2 frames");
+    refused(&ex, "one mask per frame (1 frames, 3 masks)");
+    // One frame with its mask is a still exemplar.
+    let mut ex = exemplar();
+    ex.frames.truncate(1);
+    ex.masks.truncate(1);
+    assert_eq!(Source::prepare(&ex, &params).unwrap().frames(), 1);
     let mut ex = exemplar();
     ex.masks[1] = disc(30, 40, 8.0);
     refused(&ex, "frame 2 is not 40x40");

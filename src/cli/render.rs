@@ -99,6 +99,14 @@ pub struct Args {
     /// Measure each stylized layer against its exemplar afterwards and print the numbers.
     #[arg(long)]
     pub eval: bool,
+    /// A painted keyframe, N=PAINTED.png (repeatable, one input only): frame N (1-based) of
+    /// the animation painted over, at the canvas size — render it flat with `--exemplar none
+    /// --frames N..N`, paint over it in any paint program. The layers it paints are painted
+    /// from the painting(s) in every frame (carried along their motion, forward and backward;
+    /// between two keyframes passing from one painting to the next); the layers left as they
+    /// were keep their style.
+    #[arg(long, value_name = "N=PNG")]
+    pub keyframe: Vec<String>,
     /// Files rendered at the same time in a batch (they share the cores; each holds its
     /// layers in memory).
     #[arg(long, value_name = "N", default_value_t = 2)]
@@ -435,6 +443,7 @@ fn run_one(
     let mut opts = file_options(&anim, input, out_dir, gif, &args.render, styles)?;
     opts.resume = args.resume;
     opts.eval = args.eval;
+    opts.keyframes = parse_keyframes(&args.keyframe, anim.frames)?;
     let bars = Bars::new(ctx.quiet);
     let result = render::render(&anim, &opts, &bars);
     bars.clear();
@@ -495,7 +504,33 @@ fn print_eval(summary: &RenderSummary, file: Option<&Path>) {
     }
 }
 
+/// `--keyframe N=PAINTED.png` values as (0-based frame, file) of an animation of `frames`
+/// frames; the paintings are read and checked by the render.
+fn parse_keyframes(values: &[String], frames: usize) -> Result<Vec<(usize, PathBuf)>> {
+    values
+        .iter()
+        .map(|v| {
+            let (n, file) = v
+                .split_once('=')
+                .with_context(|| format!("--keyframe '{v}': expected N=PAINTED.png (N the 1-based frame)"))?;
+            let n: usize = n
+                .trim()
+                .parse()
+                .ok()
+                .filter(|n| (1..=frames).contains(n))
+                .with_context(|| format!("--keyframe '{v}': the frame must be a number from 1 to {frames}"))?;
+            if !Path::new(file).is_file() {
+                bail!("--keyframe '{v}': no file '{file}'");
+            }
+            Ok((n - 1, PathBuf::from(file)))
+        })
+        .collect()
+}
+
 fn run_batch(args: &Args, ctx: &Ctx, layout: Vec<(PathBuf, Option<PathBuf>)>, styles: Option<&Styles>) -> Result<()> {
+    if !args.keyframe.is_empty() {
+        bail!("--keyframe paints frames of one animation: give one input");
+    }
     let start = std::time::Instant::now();
     // Load every input; one that fails is reported at the end, the others are rendered.
     let loaded: Vec<Result<Animation>> = args.targets.inputs.iter().map(|i| load_input(i, &args.render)).collect();

@@ -8,15 +8,24 @@ use fluidymation::Progress;
 use fluidymation::anim::{self, LoadOptions};
 use fluidymation::img::{self, Plane};
 use fluidymation::synth::Source;
+use fluidymation::synth::keyframes::{self, KeyedFrame, Keyframe};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 /// Arguments of `synth`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Style exemplar: a name (see `fluidymation exemplar list`) or a folder.
-    #[arg(long, short = 'e')]
-    pub exemplar: String,
+    /// Style exemplar: a name (see `fluidymation exemplar list`), a folder, or one image (a
+    /// still). Not needed with --keyframe.
+    #[arg(long, short = 'e', required_unless_present = "keyframe")]
+    pub exemplar: Option<String>,
+    /// A painted keyframe, N=PAINTING.png: frame N (1-based) painted over, the size of the
+    /// output frames. Every other frame is synthesized from the painting(s) instead of an
+    /// exemplar: carried forward and backward along the masks' motion, and between two
+    /// keyframes taken from both in blobs that pass from the earlier painting to the later one.
+    /// Repeatable.
+    #[arg(long, value_name = "N=PNG")]
+    pub keyframe: Vec<String>,
     /// Directory (or glob) of target mask PNGs, white = paint.
     #[arg(long)]
     pub masks: PathBuf,
@@ -42,9 +51,13 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     args.threads.apply()?;
     let t0 = Instant::now();
     let params = args.flags.params()?;
-    let exemplar = super::find_exemplar(&args.exemplar, &args.exemplar_dir.dirs)?;
     let anim = anim::load(&args.masks, &LoadOptions { scale: args.flags.target_scale()?, ..Default::default() })
         .with_context(|| format!("could not read the masks in '{}'", args.masks.display()))?;
+    if !args.keyframe.is_empty() {
+        return run_keyframes(&args, &anim, params, ctx);
+    }
+    let Some(name) = args.exemplar.as_deref() else { bail!("give --exemplar or --keyframe") };
+    let exemplar = super::find_exemplar(name, &args.exemplar_dir.dirs)?;
     let range = parse_frames(args.frames.as_deref(), anim.frames)?;
     warn_if_clipped(args.frames.as_deref(), &range, anim.frames, "the input");
     for dir in std::iter::once(&args.output).chain(args.debug.as_ref()) {
@@ -127,6 +140,78 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
             s(time.guides),
             s(time.synthesis),
             s(time.writing)
+        );
+    }
+    Ok(())
+}
+
+/// Parses `--keyframe N=PAINTING.png` values into keyframes of a `frames`-frame target whose
+/// frames are `size`.
+pub fn parse_keyframes(values: &[String], frames: usize, size: (usize, usize)) -> Result<Vec<Keyframe>> {
+    values
+        .iter()
+        .map(|v| {
+            let (n, file) = v
+                .split_once('=')
+                .with_context(|| format!("--keyframe '{v}': expected N=PAINTING.png (N the 1-based frame)"))?;
+            let n: usize = n
+                .trim()
+                .parse()
+                .ok()
+                .filter(|n| (1..=frames).contains(n))
+                .with_context(|| format!("--keyframe '{v}': the frame must be a number from 1 to {frames}"))?;
+            let path = std::path::Path::new(file);
+            let painting = img::load_rgb(path).with_context(|| format!("could not read the keyframe '{file}'"))?;
+            if painting.size() != size {
+                bail!(
+                    "the keyframe '{file}' is {}x{}, but the frames are {}x{}: paint over a frame of the output at its size",
+                    painting.width(),
+                    painting.height(),
+                    size.0,
+                    size.1
+                );
+            }
+            Ok(Keyframe { frame: n - 1, painting, mask: None })
+        })
+        .collect()
+}
+
+/// `synth --keyframe`: every frame painted from the painted keyframes (no exemplar).
+fn run_keyframes(args: &Args, anim: &anim::Animation, params: fluidymation::synth::Params, ctx: &Ctx) -> Result<()> {
+    let range = parse_frames(args.frames.as_deref(), anim.frames)?;
+    let size = (anim.width as usize, anim.height as usize);
+    let keys = parse_keyframes(&args.keyframe, anim.frames, size)?;
+    std::fs::create_dir_all(&args.output)
+        .with_context(|| format!("could not create the output directory '{}'", args.output.display()))?;
+    let bars = Bars::new(ctx.quiet);
+    let start = Instant::now();
+    let (mut done, mut written) = (0usize, 0usize);
+    let coverage = |k: usize| Ok(anim.render(0, k)?.coverage());
+    let mut emit = |j: usize, out: KeyedFrame| -> fluidymation::Result<()> {
+        if range.contains(&j) {
+            let rgba = Plane::from_fn(out.rgb.width(), out.rgb.height(), |x, y| {
+                let c = out.rgb.get(x, y);
+                [c[0], c[1], c[2], if out.mask.get(x, y) { 1.0 } else { 0.0 }]
+            });
+            img::save_rgba(&args.output.join(format!("{:04}.png", j + 1)), &rgba)?;
+            written += 1;
+        }
+        Ok(())
+    };
+    let mut tick = || {
+        done += 1;
+        bars.update("frames", done, anim.frames.saturating_sub(keys.len()));
+    };
+    keyframes::paint(&params, anim.frames, &coverage, &keys, &mut emit, &mut tick)
+        .context("painting from the keyframes")?;
+    bars.clear();
+    if !ctx.quiet {
+        let secs = start.elapsed().as_secs_f64();
+        eprintln!(
+            "{written} frames from {} keyframe(s) in {secs:.1} s ({:.2} s/frame synthesized) -> {}",
+            keys.len(),
+            secs / done.max(1) as f64,
+            args.output.display()
         );
     }
     Ok(())

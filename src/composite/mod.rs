@@ -72,7 +72,9 @@ mod recolor;
 
 pub use background::{Background, WHITE};
 pub use color::{linear_to_srgb, parse_color, srgb_to_linear};
-pub use recolor::{INTENSITY_FLOOR, MAX_AMOUNT, MIN_REFERENCE_DENSITY, Pigment, StylizedLayer, recolor, recolor_with};
+pub use recolor::{
+    INTENSITY_FLOOR, MAX_AMOUNT, MIN_REFERENCE_DENSITY, Pigment, StylizedLayer, painted, recolor, recolor_with,
+};
 
 use crate::error::{Error, Result};
 use crate::img::{Plane, Rgb, Rgba};

@@ -302,6 +302,31 @@ pub fn recolor_with(
     Ok(StylizedLayer { mode, width: w, height: h, bbox, px })
 }
 
+/// A layer in its final colors — a layer painted from keyframes, whose colors are the user's
+/// painting: drawn opaque (ordinary "over") with its own colors inside `mask`, nothing recolored.
+pub fn painted(rgb: &Plane<Rgb>, mask: &Mask) -> Result<StylizedLayer> {
+    check_size("mask size", mask.size(), rgb.size())?;
+    let (w, h) = rgb.size();
+    let bbox = bounding_box(mask);
+    let [x0, y0, x1, y1] = bbox;
+    let bw = x1 - x0;
+    let mut px = vec![LayerPixel::default(); bw * (y1 - y0)];
+    if bw > 0 {
+        px.par_chunks_mut(bw).enumerate().for_each(|(row, out)| {
+            let y = y0 + row;
+            for (x, p) in (x0..x1).zip(out.iter_mut()) {
+                if mask.get(x, y) {
+                    let color = rgb_to_linear(rgb.get(x, y)).map(|v| sanitize(v).max(INTENSITY_FLOOR));
+                    let ln = [fast_ln(color[0]), fast_ln(color[1]), fast_ln(color[2])];
+                    // Amount at the opaque threshold: fully opaque, in the color itself.
+                    *p = LayerPixel { on: true, amount: super::OVER_OPAQUE_AMOUNT, color, ln };
+                }
+            }
+        });
+    }
+    Ok(StylizedLayer { mode: Recolor::Over, width: w, height: h, bbox, px })
+}
+
 /// Margin (pixels) around the mask's bounding box from which flat colors are gathered.
 const TINT_MARGIN: usize = 16;
 

@@ -179,6 +179,7 @@ pub fn render_layer(
     progress: &dyn Progress,
 ) -> Result<LayerJobSummary> {
     let start = Instant::now();
+    no_keyframes(opts)?;
     let range = frame_range(anim, opts)?;
     let Some(r) = anim.regions.get(region) else {
         return Err(Error::param("layer", region + 1, format!("a layer number in 1..={}", anim.regions.len())));
@@ -336,6 +337,7 @@ fn new_layer(
 /// painted with other options.
 pub fn composite(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress) -> Result<RenderSummary> {
     let start = Instant::now();
+    no_keyframes(opts)?;
     let range = frame_range(anim, opts)?;
     let background = background(anim, opts)?;
     let styles_of = resolve_styles(anim, opts)?;
@@ -480,4 +482,14 @@ pub fn layer_costs(anim: &Animation, opts: &RenderOptions) -> Result<Vec<LayerCo
             Ok(LayerCost { region, style, frames: range.len(), masked_pixels: masked })
         })
         .collect()
+}
+
+/// Painted keyframes need every frame of a layer painted before the first is composited (the
+/// backward passes), which the per-layer jobs do not do: they are [`super::render_with`]'s only.
+fn no_keyframes(opts: &RenderOptions) -> Result<()> {
+    if opts.keyframes.is_empty() {
+        Ok(())
+    } else {
+        Err(Error::param("keyframes", opts.keyframes.len(), "none in layer and composite jobs (render the file whole)"))
+    }
 }

@@ -27,6 +27,7 @@
 //! ```
 
 mod checkpoint;
+pub mod keyframes;
 mod nnf;
 mod occurrence;
 mod params;
@@ -472,6 +473,53 @@ impl Synthesizer {
             energy: out.energy,
             debug,
         })
+    }
+
+    /// Starts the sequence at a frame whose picture is the source itself: a painted keyframe
+    /// ([`keyframes`]), whose source is the painting of this very frame `g` (same size). Nothing
+    /// is synthesized; the frame's field becomes the identity — every target pixel inside the
+    /// mask matches its own position in the source, where that is a valid center — and the
+    /// next [`Synthesizer::step`] carries it along the target's motion like any previous field.
+    /// Counts as a frame.
+    pub fn begin_at_source(&mut self, g: &FrameGuides) -> Result<()> {
+        g.check("target guides")?;
+        let (w, h) = g.mask.size();
+        let s0 = &self.source.pyramid.levels[0];
+        if (s0.w, s0.h) != (w, h) {
+            return Err(Error::param(
+                "keyframe size",
+                format!("{}x{}", s0.w, s0.h),
+                format!("{w}x{h}, the size of the target's frames"),
+            ));
+        }
+        self.size = Some((w, h));
+        self.frame += 1;
+        let levels = self.level_count(w, h);
+        let Some(win) = window(&g.mask, 1 << (levels - 1)) else {
+            self.prev = None;
+            return Ok(());
+        };
+        let pyr = self.target_pyramid(g, win, levels);
+        let s0 = &self.source.pyramid.levels[0];
+        let mut field = Nnf::new(win.2, win.3);
+        for y in 0..win.3 {
+            for x in 0..win.2 {
+                let (gx, gy) = ((win.0 + x) as f32, (win.1 + y) as f32);
+                let valid = s0.nearest(0, gx, gy).is_some_and(|idx| s0.is_valid(None, idx));
+                if pyr[0].mask.get(x, y) && valid {
+                    field.data[y * win.2 + x] =
+                        nnf::Match { x: gx, y: gy, c: 1.0, s: 0.0, err: 0.0, i: 0, flip: false, ok: true };
+                }
+            }
+        }
+        self.prev = Some(PrevState {
+            origin: (win.0, win.1),
+            nnf0: field,
+            ext_pos: pyr[0].ext_pos.data().to_vec(),
+            flow: pyr[0].flow.data().to_vec(),
+            masks: pyr.iter().map(|l| l.mask.data().to_vec()).collect(),
+        });
+        Ok(())
     }
 
     /// The target's guides cropped to the working window `win`, their extents brought to the

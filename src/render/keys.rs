@@ -1,0 +1,131 @@
+//! Painted keyframes in a render (`render --keyframe N=PAINTED.png`, issue 15): which layers a
+//! painting paints, and those layers' frames painted from the paintings
+//! ([`crate::synth::keyframes`]).
+//!
+//! A painting is the user's paint over a frame of the animation, the canvas's size — typically
+//! a flat rendering of that frame (`render --exemplar none`) painted over in any paint
+//! program. A layer counts as painted in it when, where the layer is the top-most one, the
+//! painting differs from the flat rendering by more than [`PAINTED_DIFFERENCE`] on average:
+//! layers left as they were keep their other style. A painted layer's paint at the keyframe is
+//! only what is visible of it there (its coverage less the coverage of the layers above).
+
+use super::{RenderOptions, target_fill};
+use crate::anim::Animation;
+use crate::composite::{self, Background, LayerFrame};
+use crate::error::{Error, Result};
+use crate::img::{self, Plane};
+use crate::synth::keyframes::{self, KeyedFrame, Keyframe};
+use rayon::prelude::*;
+use std::ops::Range;
+
+/// Mean color difference (sRGB, per channel, 0–1) between a painting and the flat rendering,
+/// over the pixels where a layer is on top, above which the layer counts as painted: about
+/// 8 of 255 levels — far above what saving a flat frame again changes (0–1 level), far below
+/// what paint over it does (watercolor texture alone changes it by 20–40 levels).
+pub const PAINTED_DIFFERENCE: f32 = 0.03;
+
+/// Fewest visible pixels a layer needs in a painting to count as painted there.
+const MIN_VISIBLE: usize = 16;
+
+/// Per region, the keyframes that paint it (empty: none). Loads every painting of
+/// [`RenderOptions::keyframes`] and checks it (size, frame inside the rendered range).
+pub(crate) fn painted_regions(
+    anim: &Animation,
+    opts: &RenderOptions,
+    range: &Range<usize>,
+    background: &Background,
+) -> Result<Vec<Vec<Keyframe>>> {
+    let mut per_region: Vec<Vec<Keyframe>> = vec![Vec::new(); anim.regions.len()];
+    let (w, h) = (anim.width as usize, anim.height as usize);
+    let mut seen: Vec<usize> = Vec::new();
+    for (frame, path) in &opts.keyframes {
+        if !range.contains(frame) {
+            return Err(Error::param(
+                "keyframe",
+                format!("{} ('{}')", frame + 1, path.display()),
+                format!("a frame of the rendered range ({}–{})", range.start + 1, range.end),
+            ));
+        }
+        if seen.contains(frame) {
+            return Err(Error::param("keyframe", frame + 1, "one painting per frame"));
+        }
+        seen.push(*frame);
+        let painting = img::load_rgb(path)?;
+        if painting.size() != (w, h) {
+            return Err(Error::SizeMismatch {
+                path: path.clone(),
+                expected: (w as u32, h as u32),
+                found: (painting.width() as u32, painting.height() as u32),
+            });
+        }
+        let regions: Vec<_> = (0..anim.regions.len()).map(|r| anim.render(r, *frame)).collect::<Result<_>>()?;
+        // Regions are listed top-most first; composite bottom to top.
+        let flat: Vec<LayerFrame> =
+            regions.iter().rev().map(|rf| LayerFrame::flat(&rf.fill, rf.strokes.as_ref())).collect();
+        let flat = composite::composite(w, h, background, &flat, opts.strokes)?;
+        let mut above = Plane::filled(w, h, 0.0f32);
+        for (r, rf) in regions.iter().enumerate() {
+            let cov = target_fill(rf, opts.strokes).map(|c| c[3]);
+            let visible = Plane::from_fn(w, h, |x, y| cov.get(x, y) * (1.0 - above.get(x, y)));
+            let (mut diff, mut n) = (0.0f64, 0usize);
+            for ((v, p), f) in visible.data().iter().zip(painting.data()).zip(flat.data()) {
+                if *v >= 0.5 {
+                    diff += (0..3).map(|i| (p[i] - f[i]).abs() as f64).sum::<f64>() / 3.0;
+                    n += 1;
+                }
+            }
+            if n >= MIN_VISIBLE && diff / n as f64 > PAINTED_DIFFERENCE as f64 {
+                log::info!(
+                    "keyframe {} ('{}') paints layer '{}' (mean difference {:.3} from the flat frame)",
+                    frame + 1,
+                    path.display(),
+                    anim.regions[r].name,
+                    diff / n as f64
+                );
+                per_region[r].push(Keyframe {
+                    frame: frame - range.start,
+                    painting: painting.clone(),
+                    mask: Some(visible),
+                });
+            }
+            above = Plane::from_fn(w, h, |x, y| {
+                let a = above.get(x, y);
+                a + (1.0 - a) * cov.get(x, y)
+            });
+        }
+    }
+    Ok(per_region)
+}
+
+/// The frames (over `range`) of every painted region, painted from its keyframes; `None` for
+/// the others. Regions in parallel.
+pub(crate) fn paint_regions(
+    anim: &Animation,
+    opts: &RenderOptions,
+    range: &Range<usize>,
+    keys: &[Vec<Keyframe>],
+) -> Result<Vec<Option<Vec<super::paint::Paint>>>> {
+    keys.par_iter()
+        .enumerate()
+        .map(|(region, keys)| -> Result<Option<Vec<super::paint::Paint>>> {
+            if keys.is_empty() {
+                return Ok(None);
+            }
+            let coverage =
+                |k: usize| Ok(target_fill(&anim.render(region, range.start + k)?, opts.strokes).map(|c| c[3]));
+            let mut frames: Vec<Option<super::paint::Paint>> = vec![None; range.len()];
+            let mut emit = |j: usize, out: KeyedFrame| -> Result<()> {
+                if let Some(slot) = frames.get_mut(j) {
+                    *slot = Some(super::paint::Paint::from_frame(&out.rgb, &out.mask));
+                }
+                Ok(())
+            };
+            keyframes::paint(&opts.params, range.len(), &coverage, keys, &mut emit, &mut || {})?;
+            let frames: Option<Vec<_>> = frames.into_iter().collect();
+            frames.map(Some).ok_or_else(|| Error::Empty {
+                path: anim.path.clone(),
+                what: format!("a frame of layer '{}' painted from the keyframes", anim.regions[region].name),
+            })
+        })
+        .collect()
+}
