@@ -98,5 +98,11 @@ fn a_painted_layer_follows_its_painting_and_the_others_keep_their_style() {
     bad.keyframes = vec![(40, file.clone())];
     let e = render::render(&a, &bad, &NoProgress).unwrap_err();
     assert!(matches!(e, Error::InvalidParam { .. }) && e.to_string().contains("41"), "{e}");
+    // A "painting" that is the flat frame itself paints nothing: an error, not a silent no-op.
+    let unpainted = dir.join("unpainted.png");
+    img::save_rgb(&unpainted, &flat).unwrap();
+    bad.keyframes = vec![(key, unpainted)];
+    let e = render::render(&a, &bad, &NoProgress).unwrap_err().to_string();
+    assert!(e.contains("unpainted.png") && e.contains("paints no layer"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

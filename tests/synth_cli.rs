@@ -85,3 +85,51 @@ fn synth_names_a_missing_input() {
     assert!(!dir.join("out").join("0001.png").exists(), "nothing written before the error");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `synth --keyframe`: no exemplar needed; the keyframe's frame is the painting, every frame is
+/// written; a painting of the wrong size or a malformed value is an error that names it.
+#[test]
+fn synth_paints_from_a_keyframe() {
+    let dir = scratch("keyframe");
+    let o = run(&["bench", "--frames", "4", "--size", "160x128", "--save-workload", s(&dir)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let masks = dir.join("masks");
+    // The painting of frame 2: a striped paint over the whole frame (only its mask's part counts).
+    let painting = image::RgbImage::from_fn(160, 128, |x, y| {
+        let v = if (x / 3 + y / 5) % 2 == 0 { 60 } else { 200 };
+        image::Rgb([v, 90, 255 - v])
+    });
+    let key = dir.join("key.png");
+    painting.save(&key).unwrap();
+    let out = dir.join("out");
+    let keyframe = format!("2={}", s(&key));
+    let o = run(&["synth", "--masks", s(&masks), "--keyframe", &keyframe, "-o", s(&out), "-q"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let frame2 = image::open(out.join("0002.png")).unwrap().into_rgba8();
+    let mask2 = image::open(masks.join("0002.png")).unwrap().into_luma8();
+    let mut inside = 0;
+    for (x, y, p) in frame2.enumerate_pixels() {
+        if mask2.get_pixel(x, y)[0] > 200 && p[3] == 255 {
+            assert_eq!(&p.0[..3], &painting.get_pixel(x, y).0[..], "({x}, {y})");
+            inside += 1;
+        }
+    }
+    assert!(inside > 500, "{inside} painted pixels");
+    for k in 1..=4 {
+        assert!(out.join(format!("{k:04}.png")).is_file(), "frame {k}");
+    }
+    // Errors name what is wrong.
+    image::RgbImage::new(20, 20).save(dir.join("small.png")).unwrap();
+    let small = format!("2={}", s(&dir.join("small.png")));
+    let o = run(&["synth", "--masks", s(&masks), "--keyframe", &small, "-o", s(&out)]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("small.png") && stderr(&o).contains("160x128"),
+        "{}",
+        stderr(&o)
+    );
+    let o = run(&["synth", "--masks", s(&masks), "--keyframe", "nine=key.png", "-o", s(&out)]);
+    assert!(!o.status.success() && stderr(&o).contains("nine=key.png"), "{}", stderr(&o));
+    let o = run(&["synth", "--masks", s(&masks), "-o", s(&out)]);
+    assert!(!o.status.success() && stderr(&o).contains("--exemplar"), "{}", stderr(&o));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -54,6 +54,9 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     let anim = anim::load(&args.masks, &LoadOptions { scale: args.flags.target_scale()?, ..Default::default() })
         .with_context(|| format!("could not read the masks in '{}'", args.masks.display()))?;
     if !args.keyframe.is_empty() {
+        if let Some(e) = &args.exemplar {
+            log::warn!("--exemplar '{e}' is not used: with --keyframe every frame is painted from the keyframes");
+        }
         return run_keyframes(&args, &anim, params, ctx);
     }
     let Some(name) = args.exemplar.as_deref() else { bail!("give --exemplar or --keyframe") };

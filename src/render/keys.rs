@@ -64,6 +64,8 @@ pub(crate) fn painted_regions(
             regions.iter().rev().map(|rf| LayerFrame::flat(&rf.fill, rf.strokes.as_ref())).collect();
         let flat = composite::composite(w, h, background, &flat, opts.strokes)?;
         let mut above = Plane::filled(w, h, 0.0f32);
+        let mut painted = 0usize;
+        let mut largest = 0.0f64;
         for (r, rf) in regions.iter().enumerate() {
             let cov = target_fill(rf, opts.strokes).map(|c| c[3]);
             let visible = Plane::from_fn(w, h, |x, y| cov.get(x, y) * (1.0 - above.get(x, y)));
@@ -74,7 +76,11 @@ pub(crate) fn painted_regions(
                     n += 1;
                 }
             }
+            if n >= MIN_VISIBLE {
+                largest = largest.max(diff / n as f64);
+            }
             if n >= MIN_VISIBLE && diff / n as f64 > PAINTED_DIFFERENCE as f64 {
+                painted += 1;
                 log::info!(
                     "keyframe {} ('{}') paints layer '{}' (mean difference {:.3} from the flat frame)",
                     frame + 1,
@@ -91,6 +97,17 @@ pub(crate) fn painted_regions(
             above = Plane::from_fn(w, h, |x, y| {
                 let a = above.get(x, y);
                 a + (1.0 - a) * cov.get(x, y)
+            });
+        }
+        if painted == 0 {
+            return Err(Error::Exemplar {
+                path: path.clone(),
+                message: format!(
+                    "paints no layer of frame {}: where each layer shows, it differs from the flat frame by at most \
+                     {largest:.3} on average (a painted layer: more than {PAINTED_DIFFERENCE}); paint over the flat \
+                     frame (render --exemplar none --frames {0}..{0})",
+                    frame + 1
+                ),
             });
         }
     }
