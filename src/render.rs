@@ -483,7 +483,7 @@ pub fn render_with(
     let background = background(anim, opts)?;
     let prepared = prepare(anim, opts, &range, None, cache)?;
     let n = range.len();
-    let keyed = keys::paint_regions(anim, opts, &range, &keys::painted_regions(anim, opts, &range, &background)?)?;
+    let painted = keys::painted_regions(anim, opts, &range, &background)?;
     // Resume: check that there is something to continue, made with the same options, before
     // anything is created or computed; then the output locations, checked before the work.
     let fingerprint = render_fingerprint(anim, opts, &range, &prepared)?;
@@ -495,6 +495,9 @@ pub fn render_with(
         // Resumable from the start: an interruption before the first frame resumes too.
         None => Journal::create(&opts.out_dir, fingerprint, n, Remedy::RenderAgain)?,
     };
+    // Layers painted from keyframes: every frame painted first (the backward passes), to the
+    // state folder.
+    let keyed = keys::paint_regions(anim, opts, &range, &painted, &opts.out_dir.join(STATE_DIR))?;
 
     let stages: Vec<String> = (0..anim.regions.len()).map(|r| stage_name(anim, r)).collect();
     let mut layers = start_layers(anim, opts, &range, &prepared, done, &keyed)?;
@@ -519,7 +522,7 @@ pub fn render_with(
                 let rf = anim.render(l.region, frame)?;
                 let layer = match &keyed[l.region] {
                     Some(frames) => {
-                        let (rgb, mask) = frames[k].rgb_mask();
+                        let (rgb, mask) = frames.frame(k)?.rgb_mask();
                         Some(composite::painted(&rgb, &mask)?)
                     }
                     None => paint_layer(anim, opts, &prepared.styles, l, &rf, frame)?,
@@ -542,6 +545,8 @@ pub fn render_with(
         }
     }
 
+    keyed.iter().flatten().for_each(keys::KeyedFrames::remove);
+    let _ = std::fs::remove_dir(opts.out_dir.join(STATE_DIR).join("keyframes"));
     write_gif(anim, opts, &range, &background, progress)?;
     // The progress file and the frames log stay (they say the render is complete and what it
     // wrote, for a later --resume).
@@ -604,7 +609,7 @@ fn start_layers(
     range: &Range<usize>,
     p: &Prepared,
     done: usize,
-    keyed: &[Option<Vec<paint::Paint>>],
+    keyed: &[Option<keys::KeyedFrames>],
 ) -> Result<Vec<Layer>> {
     (0..anim.regions.len())
         .into_par_iter()
@@ -661,7 +666,7 @@ fn summarize(
     opts: &RenderOptions,
     styles: &[Style],
     layers: &[Layer],
-    keyed: &[Option<Vec<paint::Paint>>],
+    keyed: &[Option<keys::KeyedFrames>],
 ) -> Result<Vec<LayerSummary>> {
     let (w, h) = (anim.width as usize, anim.height as usize);
     layers

@@ -7,7 +7,9 @@
 //! program. A layer counts as painted in it when, where the layer is the top-most one, the
 //! painting differs from the flat rendering by more than [`PAINTED_DIFFERENCE`] on average:
 //! layers left as they were keep their other style. A painted layer's paint at the keyframe is
-//! only what is visible of it there (its coverage less the coverage of the layers above).
+//! only what is visible of it there (its coverage less the coverage of the layers above). Its
+//! frames are painted before the render composites its first frame (the backward passes run
+//! from later keyframes), into the render's state folder, and read back frame by frame.
 
 use super::{RenderOptions, target_fill};
 use crate::anim::Animation;
@@ -114,35 +116,49 @@ pub(crate) fn painted_regions(
     Ok(per_region)
 }
 
-/// The frames (over `range`) of every painted region, painted from its keyframes; `None` for
-/// the others. Regions in parallel.
+/// The frames of a layer painted from keyframes, written under `dir` (one 16-bit PNG a frame,
+/// [`super::paint::Paint`]) as they are painted and read back one at a time while compositing,
+/// so that a long render does not hold them in memory.
+pub(crate) struct KeyedFrames {
+    dir: std::path::PathBuf,
+}
+
+impl KeyedFrames {
+    /// Frame k (0-based within the rendered range).
+    pub(crate) fn frame(&self, k: usize) -> Result<super::paint::Paint> {
+        super::paint::Paint::load(&self.dir.join(format!("{:04}.png", k + 1)))
+    }
+
+    /// Removes the frames.
+    pub(crate) fn remove(&self) {
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+/// Paints every painted region's frames (over `range`) from its keyframes, into
+/// `state/keyframes/NN/`; `None` for the others. Regions in parallel.
 pub(crate) fn paint_regions(
     anim: &Animation,
     opts: &RenderOptions,
     range: &Range<usize>,
     keys: &[Vec<Keyframe>],
-) -> Result<Vec<Option<Vec<super::paint::Paint>>>> {
+    state: &std::path::Path,
+) -> Result<Vec<Option<KeyedFrames>>> {
     keys.par_iter()
         .enumerate()
-        .map(|(region, keys)| -> Result<Option<Vec<super::paint::Paint>>> {
+        .map(|(region, keys)| -> Result<Option<KeyedFrames>> {
             if keys.is_empty() {
                 return Ok(None);
             }
+            let dir = state.join("keyframes").join(format!("{:02}", region + 1));
+            std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
             let coverage =
                 |k: usize| Ok(target_fill(&anim.render(region, range.start + k)?, opts.strokes).map(|c| c[3]));
-            let mut frames: Vec<Option<super::paint::Paint>> = vec![None; range.len()];
             let mut emit = |j: usize, out: KeyedFrame| -> Result<()> {
-                if let Some(slot) = frames.get_mut(j) {
-                    *slot = Some(super::paint::Paint::from_frame(&out.rgb, &out.mask));
-                }
-                Ok(())
+                super::paint::Paint::from_frame(&out.rgb, &out.mask).save(&dir.join(format!("{:04}.png", j + 1)))
             };
             keyframes::paint(&opts.params, range.len(), &coverage, keys, &mut emit, &mut || {})?;
-            let frames: Option<Vec<_>> = frames.into_iter().collect();
-            frames.map(Some).ok_or_else(|| Error::Empty {
-                path: anim.path.clone(),
-                what: format!("a frame of layer '{}' painted from the keyframes", anim.regions[region].name),
-            })
+            Ok(Some(KeyedFrames { dir }))
         })
         .collect()
 }
