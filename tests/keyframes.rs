@@ -109,20 +109,7 @@ fn measure(t: &Seq, frames: &[KeyedFrame], key: &Keyframe) -> Report {
     let mask = t.coverage(key.frame);
     let ex = Exemplar {
         dir: None,
-        meta: ExemplarMeta {
-            name: "painting".into(),
-            description: String::new(),
-            fps: 24.0,
-            paper: fluidymation::exemplar::hex_color(PAPER),
-            pigment: String::new(),
-            border_width: 10.0,
-            scale: 1.0,
-            speed: 1,
-            seed: None,
-            generator: None,
-            license: String::new(),
-            origin: String::new(),
-        },
+        meta: ExemplarMeta::new("painting", PAPER),
         frames: vec![key.painting.clone()],
         masks: vec![mask],
     };

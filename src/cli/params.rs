@@ -314,6 +314,24 @@ pub struct ExemplarDirs {
     pub dirs: Vec<std::path::PathBuf>,
 }
 
+/// One `--keyframe N=PAINTED.png` value of an animation of `frames` frames: the 0-based frame
+/// and the painting's file (which must exist; it is read and checked by whoever uses it).
+pub fn parse_keyframe(v: &str, frames: usize) -> anyhow::Result<(usize, std::path::PathBuf)> {
+    use anyhow::Context;
+    let (n, file) =
+        v.split_once('=').with_context(|| format!("--keyframe '{v}': expected N=PAINTED.png (N the 1-based frame)"))?;
+    let n: usize = n
+        .trim()
+        .parse()
+        .ok()
+        .filter(|n| (1..=frames).contains(n))
+        .with_context(|| format!("--keyframe '{v}': the frame must be a number from 1 to {frames}"))?;
+    if !std::path::Path::new(file).is_file() {
+        anyhow::bail!("--keyframe '{v}': no file '{file}'");
+    }
+    Ok((n - 1, std::path::PathBuf::from(file)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

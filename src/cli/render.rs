@@ -2,7 +2,7 @@
 //! batch; and the options it shares with `plan`, `render-layer` and `composite`.
 
 use super::Ctx;
-use super::params::{ExemplarDirs, SynthFlags, Threads, parse_frames, warn_if_clipped};
+use super::params::{ExemplarDirs, SynthFlags, Threads, parse_frames, parse_keyframe, warn_if_clipped};
 use super::progress::{Bars, handle_interrupts};
 use anyhow::{Context, Result, bail};
 use fluidymation::anim::{self, Animation, LoadOptions};
@@ -443,7 +443,7 @@ fn run_one(
     let mut opts = file_options(&anim, input, out_dir, gif, &args.render, styles)?;
     opts.resume = args.resume;
     opts.eval = args.eval;
-    opts.keyframes = parse_keyframes(&args.keyframe, anim.frames)?;
+    opts.keyframes = args.keyframe.iter().map(|v| parse_keyframe(v, anim.frames)).collect::<Result<_>>()?;
     let bars = Bars::new(ctx.quiet);
     let result = render::render(&anim, &opts, &bars);
     bars.clear();
@@ -502,29 +502,6 @@ fn print_eval(summary: &RenderSummary, file: Option<&Path>) {
             println!("{}", r);
         }
     }
-}
-
-/// `--keyframe N=PAINTED.png` values as (0-based frame, file) of an animation of `frames`
-/// frames; the paintings are read and checked by the render.
-fn parse_keyframes(values: &[String], frames: usize) -> Result<Vec<(usize, PathBuf)>> {
-    values
-        .iter()
-        .map(|v| {
-            let (n, file) = v
-                .split_once('=')
-                .with_context(|| format!("--keyframe '{v}': expected N=PAINTED.png (N the 1-based frame)"))?;
-            let n: usize = n
-                .trim()
-                .parse()
-                .ok()
-                .filter(|n| (1..=frames).contains(n))
-                .with_context(|| format!("--keyframe '{v}': the frame must be a number from 1 to {frames}"))?;
-            if !Path::new(file).is_file() {
-                bail!("--keyframe '{v}': no file '{file}'");
-            }
-            Ok((n - 1, PathBuf::from(file)))
-        })
-        .collect()
 }
 
 fn run_batch(args: &Args, ctx: &Ctx, layout: Vec<(PathBuf, Option<PathBuf>)>, styles: Option<&Styles>) -> Result<()> {

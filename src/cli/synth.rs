@@ -154,27 +154,20 @@ pub fn parse_keyframes(values: &[String], frames: usize, size: (usize, usize)) -
     values
         .iter()
         .map(|v| {
-            let (n, file) = v
-                .split_once('=')
-                .with_context(|| format!("--keyframe '{v}': expected N=PAINTING.png (N the 1-based frame)"))?;
-            let n: usize = n
-                .trim()
-                .parse()
-                .ok()
-                .filter(|n| (1..=frames).contains(n))
-                .with_context(|| format!("--keyframe '{v}': the frame must be a number from 1 to {frames}"))?;
-            let path = std::path::Path::new(file);
-            let painting = img::load_rgb(path).with_context(|| format!("could not read the keyframe '{file}'"))?;
+            let (frame, path) = super::params::parse_keyframe(v, frames)?;
+            let painting =
+                img::load_rgb(&path).with_context(|| format!("could not read the keyframe '{}'", path.display()))?;
             if painting.size() != size {
                 bail!(
-                    "the keyframe '{file}' is {}x{}, but the frames are {}x{}: paint over a frame of the output at its size",
+                    "the keyframe '{}' is {}x{}, but the frames are {}x{}: paint over a frame of the output at its size",
+                    path.display(),
                     painting.width(),
                     painting.height(),
                     size.0,
                     size.1
                 );
             }
-            Ok(Keyframe { frame: n - 1, painting, mask: None })
+            Ok(Keyframe { frame, painting, mask: None })
         })
         .collect()
 }

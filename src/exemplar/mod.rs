@@ -81,6 +81,28 @@ pub struct ExemplarMeta {
     pub origin: String,
 }
 
+impl ExemplarMeta {
+    /// Metadata for an exemplar made in memory (a keyframe's painting, frames a program made):
+    /// `name`, the paper color `paper`, and the defaults `exemplar.toml` has for the rest (24
+    /// fps, border width 10, scale and speed 1, no pigment, description, license or origin).
+    pub fn new(name: &str, paper: Rgb) -> ExemplarMeta {
+        ExemplarMeta {
+            name: name.into(),
+            description: String::new(),
+            fps: default_fps(),
+            paper: hex_color(paper),
+            pigment: String::new(),
+            border_width: default_border(),
+            scale: one_f32(),
+            speed: one_usize(),
+            seed: None,
+            generator: None,
+            license: String::new(),
+            origin: String::new(),
+        }
+    }
+}
+
 fn default_fps() -> f32 {
     24.0
 }

@@ -95,20 +95,7 @@ pub fn key_source(key: &Keyframe, coverage: &Plane<f32>, params: &Params) -> Res
             let mean = |k: usize| outside.iter().map(|c| c[k]).sum::<f32>() / outside.len().max(1) as f32;
             let ex = Exemplar {
                 dir: None,
-                meta: ExemplarMeta {
-                    name: "keyframe".into(),
-                    description: String::new(),
-                    fps: 24.0,
-                    paper: crate::exemplar::hex_color([mean(0), mean(1), mean(2)]),
-                    pigment: String::new(),
-                    border_width: crate::exemplar::border::FALLBACK_WIDTH,
-                    scale: 1.0,
-                    speed: 1,
-                    seed: None,
-                    generator: None,
-                    license: String::new(),
-                    origin: String::new(),
-                },
+                meta: ExemplarMeta::new("keyframe", [mean(0), mean(1), mean(2)]),
                 frames: vec![key.painting.clone()],
                 masks,
             };
