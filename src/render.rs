@@ -98,9 +98,10 @@ pub struct RenderOptions {
     pub resume: bool,
     /// Measure every stylized layer against its exemplar afterwards ([`eval`]).
     pub eval: bool,
-    /// Painted keyframes: (animation frame, 0-based; the painting's file). The layers a
-    /// painting paints are painted from the paintings in every frame, the others keep their
-    /// style (module [`keys`]).
+    /// Painted keyframes: (animation frame, 0-based; the painting's file), each painting the
+    /// canvas's size (or the animation's unscaled size, resized along with [`Self::scale`]).
+    /// The layers a painting paints are painted from the paintings in every frame, the others
+    /// keep their style (module [`keys`]).
     pub keyframes: Vec<(usize, PathBuf)>,
 }
 

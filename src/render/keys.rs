@@ -52,7 +52,12 @@ pub(crate) fn painted_regions(
             return Err(Error::param("keyframe", frame + 1, "one painting per frame"));
         }
         seen.push(*frame);
-        let painting = img::load_rgb(path)?;
+        let mut painting = img::load_rgb(path)?;
+        // Painted at the animation's own size, rendered with --scale: scaled along.
+        let full = ((w as f32 / opts.scale).round() as usize, (h as f32 / opts.scale).round() as usize);
+        if opts.scale != 1.0 && painting.size() == full {
+            painting = img::resize_bilinear(&painting, w, h);
+        }
         if painting.size() != (w, h) {
             return Err(Error::SizeMismatch {
                 path: path.clone(),
