@@ -88,6 +88,19 @@ fn a_painted_layer_follows_its_painting_and_the_others_keep_their_style() {
         assert!(sd > 0.02, "frame {}: the dress is flat (σ {sd})", k + 1);
     }
 
+    // A preview at half size takes the full-size painting, scaled along.
+    let half = anim::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/demo/waving.json"),
+        &anim::LoadOptions { scale: 0.5, ..Default::default() },
+    )
+    .unwrap();
+    let mut preview = RenderOptions::new(dir.join("preview"), 22..25);
+    preview.scale = 0.5;
+    preview.keyframes = vec![(key, file.clone())];
+    let summary = render::render(&half, &preview, &NoProgress).unwrap();
+    let dress = summary.layers.iter().find(|l| l.name == "dress").unwrap();
+    assert_eq!(dress.exemplar.as_deref(), Some(KEYFRAMES_STYLE));
+
     // Errors name the file and the value.
     let small = dir.join("small.png");
     img::save_rgb(&small, &Plane::filled(10, 10, [1.0; 3])).unwrap();
