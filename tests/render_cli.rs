@@ -783,3 +783,28 @@ fn thin_layers_keep_their_shape() {
         );
     }
 }
+
+/// A render with a painted keyframe, killed in the middle, resumes to the same bytes (the
+/// painted layers' frames are painted again from the keyframe; the rest from the checkpoints).
+#[cfg(unix)]
+#[test]
+fn keyframe_renders_resume_to_the_same_bytes() {
+    let tmp = Scratch::new("resume-keys");
+    let painting = root().join("fixtures/demo/painted-0024.png");
+    let key = format!("24={}", painting.to_str().unwrap());
+    let args = ["--frames", "18..30", "--scale", "0.5", "--keyframe", &key];
+    let full = tmp.join("full");
+    assert_success(&render(&demo(), &full, &args));
+    let out = tmp.join("out");
+    let mut child = spawn(&demo(), &out, &args);
+    wait_for(&mut child, &out.join("0022.png"));
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(!out.join("0030.png").exists(), "the kill came before the last frame");
+    let resume: Vec<&str> = args.iter().copied().chain(["--resume"]).collect();
+    let o = render(&demo(), &out, &resume);
+    assert_success(&o);
+    assert!(stderr(&o).contains("resumed"), "{}", stderr(&o));
+    assert_eq!(tree(&out), tree(&full), "same files, no temporary or state files left");
+    assert!(png_bytes(&out) == png_bytes(&full), "resumed frames differ from the uninterrupted render");
+}
