@@ -271,6 +271,33 @@ pub fn recolor_with(
     ];
     let tint = if mode == Recolor::None || bw == 0 { None } else { Some(extended_tint(flat, mask, grown)) };
     let paper_lin = rgb_to_linear(pigment.paper());
+    Ok(layer(mask, mode, |x, y| {
+        let c = stylized.get(x, y);
+        match &tint {
+            Some(t) => (pigment.amount(c), t.get(x - grown[0], y - grown[1])),
+            None => {
+                let lin = rgb_to_linear(c);
+                (1.0, [0, 1, 2].map(|i| (lin[i] / paper_lin[i].max(INTENSITY_FLOOR)).min(1.0)))
+            }
+        }
+    }))
+}
+
+/// A layer in its final colors — a layer painted from keyframes, whose colors are the user's
+/// painting: drawn opaque (ordinary "over") with its own colors inside `mask`, nothing recolored.
+pub fn painted(rgb: &Plane<Rgb>, mask: &Mask) -> Result<StylizedLayer> {
+    check_size("mask size", mask.size(), rgb.size())?;
+    // Amount at the opaque threshold: fully opaque, in the color itself.
+    Ok(layer(mask, Recolor::Over, |x, y| (super::OVER_OPAQUE_AMOUNT, rgb_to_linear(rgb.get(x, y)))))
+}
+
+/// The layer of the pixels inside `mask` (over its bounding box, rows in parallel), each
+/// `pixel(x, y)` = (pigment amount, linear color).
+fn layer(mask: &Mask, mode: Recolor, pixel: impl Fn(usize, usize) -> (f32, Rgb) + Sync) -> StylizedLayer {
+    let (w, h) = mask.size();
+    let bbox = bounding_box(mask);
+    let [x0, y0, x1, y1] = bbox;
+    let bw = x1 - x0;
     let mut px = vec![LayerPixel::default(); bw * (y1 - y0)];
     if bw > 0 {
         px.par_chunks_mut(bw).enumerate().for_each(|(row, out)| {
@@ -281,14 +308,7 @@ pub fn recolor_with(
                 if !mask.get(x, y) {
                     continue;
                 }
-                let c = stylized.get(x, y);
-                let (amount, color) = match &tint {
-                    Some(t) => (pigment.amount(c), t.get(x - grown[0], y - grown[1])),
-                    None => {
-                        let lin = rgb_to_linear(c);
-                        (1.0, [0, 1, 2].map(|i| (lin[i] / paper_lin[i].max(INTENSITY_FLOOR)).min(1.0)))
-                    }
-                };
+                let (amount, color) = pixel(x, y);
                 let color = color.map(|v| sanitize(v).max(INTENSITY_FLOOR));
                 let ln = match last {
                     Some((c, ln)) if c == color => ln,
@@ -299,32 +319,7 @@ pub fn recolor_with(
             }
         });
     }
-    Ok(StylizedLayer { mode, width: w, height: h, bbox, px })
-}
-
-/// A layer in its final colors — a layer painted from keyframes, whose colors are the user's
-/// painting: drawn opaque (ordinary "over") with its own colors inside `mask`, nothing recolored.
-pub fn painted(rgb: &Plane<Rgb>, mask: &Mask) -> Result<StylizedLayer> {
-    check_size("mask size", mask.size(), rgb.size())?;
-    let (w, h) = rgb.size();
-    let bbox = bounding_box(mask);
-    let [x0, y0, x1, y1] = bbox;
-    let bw = x1 - x0;
-    let mut px = vec![LayerPixel::default(); bw * (y1 - y0)];
-    if bw > 0 {
-        px.par_chunks_mut(bw).enumerate().for_each(|(row, out)| {
-            let y = y0 + row;
-            for (x, p) in (x0..x1).zip(out.iter_mut()) {
-                if mask.get(x, y) {
-                    let color = rgb_to_linear(rgb.get(x, y)).map(|v| sanitize(v).max(INTENSITY_FLOOR));
-                    let ln = [fast_ln(color[0]), fast_ln(color[1]), fast_ln(color[2])];
-                    // Amount at the opaque threshold: fully opaque, in the color itself.
-                    *p = LayerPixel { on: true, amount: super::OVER_OPAQUE_AMOUNT, color, ln };
-                }
-            }
-        });
-    }
-    Ok(StylizedLayer { mode: Recolor::Over, width: w, height: h, bbox, px })
+    StylizedLayer { mode, width: w, height: h, bbox, px }
 }
 
 /// Margin (pixels) around the mask's bounding box from which flat colors are gathered.
