@@ -108,11 +108,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
             continue;
         }
         let t = Instant::now();
-        let rgba = Plane::from_fn(out.rgb.width(), out.rgb.height(), |x, y| {
-            let c = out.rgb.get(x, y);
-            [c[0], c[1], c[2], if out.mask.get(x, y) { 1.0 } else { 0.0 }]
-        });
-        img::save_rgba(&args.output.join(format!("{:04}.png", k + 1)), &rgba)?;
+        save_frame(&args.output, k, &out.rgb, &out.mask)?;
         if let (Some(dir), Some(d)) = (&args.debug, &out.debug) {
             img::save_rgb(&dir.join(format!("nnf_{:04}.png", k + 1)), &d.nnf)?;
             let max = d.omega.data().iter().cloned().fold(1e-6f32, f32::max);
@@ -185,11 +181,7 @@ fn run_keyframes(args: &Args, anim: &anim::Animation, params: fluidymation::synt
     let coverage = |k: usize| Ok(anim.render(0, k)?.coverage());
     let mut emit = |j: usize, out: KeyedFrame| -> fluidymation::Result<()> {
         if range.contains(&j) {
-            let rgba = Plane::from_fn(out.rgb.width(), out.rgb.height(), |x, y| {
-                let c = out.rgb.get(x, y);
-                [c[0], c[1], c[2], if out.mask.get(x, y) { 1.0 } else { 0.0 }]
-            });
-            img::save_rgba(&args.output.join(format!("{:04}.png", j + 1)), &rgba)?;
+            save_frame(&args.output, j, &out.rgb, &out.mask)?;
             written += 1;
         }
         Ok(())
@@ -211,6 +203,15 @@ fn run_keyframes(args: &Args, anim: &anim::Animation, params: fluidymation::synt
         );
     }
     Ok(())
+}
+
+/// Writes frame `k` (0-based) as `dir/NNNN.png`: RGBA, the colors with alpha = the mask.
+fn save_frame(dir: &std::path::Path, k: usize, rgb: &Plane<img::Rgb>, mask: &img::Mask) -> fluidymation::Result<()> {
+    let rgba = Plane::from_fn(rgb.width(), rgb.height(), |x, y| {
+        let c = rgb.get(x, y);
+        [c[0], c[1], c[2], if mask.get(x, y) { 1.0 } else { 0.0 }]
+    });
+    img::save_rgba(&dir.join(format!("{:04}.png", k + 1)), &rgba)
 }
 
 /// Where the time of a run goes (reported after it).

@@ -309,6 +309,20 @@ struct PrevState {
     masks: Vec<Vec<bool>>,
 }
 
+impl PrevState {
+    /// The state a frame leaves: its working window `win`, its final field, its finest guides
+    /// `g0` (for `T^ext+` and `T^flow`) and its masks per level.
+    fn new(win: (usize, usize, usize, usize), field: Nnf, g0: &FrameGuides, masks: Vec<Vec<bool>>) -> PrevState {
+        PrevState {
+            origin: (win.0, win.1),
+            nnf0: field,
+            ext_pos: g0.ext_pos.data().to_vec(),
+            flow: g0.flow.data().to_vec(),
+            masks,
+        }
+    }
+}
+
 /// Synthesizes a target sequence frame by frame ([`Synthesizer::step`]).
 pub struct Synthesizer {
     params: Params,
@@ -456,13 +470,7 @@ impl Synthesizer {
             shifted: shifted.as_ref().map(|f| place.raw(f)).unwrap_or_else(|| Plane::filled(w, h, [f32::NAN; 4])),
         });
         let g0 = &pyr[0];
-        self.prev = Some(PrevState {
-            origin: (win.0, win.1),
-            nnf0: out.field,
-            ext_pos: g0.ext_pos.data().to_vec(),
-            flow: g0.flow.data().to_vec(),
-            masks: out.masks,
-        });
+        self.prev = Some(PrevState::new(win, out.field, g0, out.masks));
         self.frame += 1;
         Ok(SynthFrame {
             rgb,
@@ -512,13 +520,8 @@ impl Synthesizer {
                 }
             }
         }
-        self.prev = Some(PrevState {
-            origin: (win.0, win.1),
-            nnf0: field,
-            ext_pos: pyr[0].ext_pos.data().to_vec(),
-            flow: pyr[0].flow.data().to_vec(),
-            masks: pyr.iter().map(|l| l.mask.data().to_vec()).collect(),
-        });
+        let masks = pyr.iter().map(|l| l.mask.data().to_vec()).collect();
+        self.prev = Some(PrevState::new(win, field, &pyr[0], masks));
         Ok(())
     }
 
