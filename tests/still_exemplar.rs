@@ -18,16 +18,6 @@ fn swatch_file(dir: &std::path::Path, name: &str) -> std::path::PathBuf {
     path
 }
 
-fn iou(a: &Plane<f32>, b: &Plane<f32>) -> f32 {
-    let (mut i, mut u) = (0usize, 0usize);
-    for (x, y) in a.data().iter().zip(b.data()) {
-        let (x, y) = (*x >= 0.5, *y >= 0.5);
-        i += (x && y) as usize;
-        u += (x || y) as usize;
-    }
-    i as f32 / u.max(1) as f32
-}
-
 /// An image file given where an exemplar is asked for is a still exemplar: one frame, named after
 /// the file, its paper keyed out into the same mask `exemplar import` gives the image.
 #[test]
@@ -39,7 +29,7 @@ fn one_image_is_a_still_exemplar() {
     let still = exemplar::find(path.to_str().unwrap(), &SearchPath::new()).unwrap();
     assert_eq!(still.len(), 1);
     assert_eq!(still.meta.name, "my-swatch");
-    let overlap = iou(&still.masks[0], &bundled.masks[0]);
+    let overlap = import::iou(&still.masks[0], &bundled.masks[0]);
     assert!(overlap > 0.99, "mask IoU with the bundled swatch's {overlap}");
     let opts = import::ImportOptions { name: "swatch".into(), ..Default::default() };
     let imported = import::import(&path, &opts, &NoProgress).unwrap();

@@ -355,8 +355,9 @@ fn exemplar_view(params: &Params, ex: &Exemplar) -> (f32, usize) {
     (params.src_scale().unwrap_or(ex.meta.scale), params.src_speed().unwrap_or(ex.meta.speed).max(1))
 }
 
-/// PSNR of `out` against `reference` over `mask`, dB (capped at [`PSNR_CAP`]).
-fn psnr(out: &Plane<Rgb>, reference: &Plane<Rgb>, mask: &Plane<f32>) -> Option<f32> {
+/// PSNR of `out` against `reference` over `mask` (coverage ≥ [`eval::MASK_THRESHOLD`]), dB
+/// (capped at [`PSNR_CAP`]); `None` for an empty mask.
+pub fn psnr(out: &Plane<Rgb>, reference: &Plane<Rgb>, mask: &Plane<f32>) -> Option<f32> {
     let (mut se, mut n) = (0f64, 0u64);
     for ((o, r), &m) in out.data().iter().zip(reference.data()).zip(mask.data()) {
         if m >= eval::MASK_THRESHOLD {
