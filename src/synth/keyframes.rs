@@ -140,7 +140,7 @@ pub fn paint(
     if first > 0 {
         let seq: Vec<usize> = (0..=first).rev().collect();
         let mut held = Held::new(first);
-        pass(&sources[0], params, &seq, coverage, false, &mut |j, out| {
+        pass(&sources[0], params, &seq, coverage, false, &mut |j, out, _| {
             tick();
             held.put(j, out);
             Ok(())
@@ -154,7 +154,7 @@ pub fn paint(
         let Some(next) = keys.get(a + 1) else {
             // After the last keyframe: forward from it.
             let seq: Vec<usize> = (key.frame..frames).collect();
-            return pass(&sources[a], params, &seq, coverage, false, &mut |j, out| {
+            return pass(&sources[a], params, &seq, coverage, false, &mut |j, out, _| {
                 tick();
                 emit(j, KeyedFrame { rgb: out.rgb, mask: out.mask })
             });
@@ -166,17 +166,17 @@ pub fn paint(
         // Backward from B, held; then forward from A, each frame merged with the held one.
         let seq_b: Vec<usize> = (ka + 1..=kb).rev().collect();
         let mut held = Held::new(kb);
-        pass(&sources[a + 1], params, &seq_b, coverage, false, &mut |j, out| {
+        pass(&sources[a + 1], params, &seq_b, coverage, false, &mut |j, out, _| {
             tick();
             held.put(j, out);
             Ok(())
         })?;
         let seq_a: Vec<usize> = (ka..kb).collect();
-        pass(&sources[a], params, &seq_a, coverage, true, &mut |j, out| {
+        pass(&sources[a], params, &seq_a, coverage, true, &mut |j, out, field| {
             tick();
             let t = (j - ka) as f32 / (kb - ka) as f32;
             let back = held.take(j)?;
-            emit(j, merge(out, back, t, seed ^ ((ka as u64) << 32) ^ kb as u64))
+            emit(j, merge(out, field.as_ref(), back, t, seed ^ ((ka as u64) << 32) ^ kb as u64))
         })?;
     }
     Ok(())
@@ -210,26 +210,27 @@ impl Held {
 }
 
 /// One pass from a keyframe along `seq` (target frame indices; `seq[0]` is the keyframe's),
-/// handing every later frame to `emit`. With `debug`, the frames carry their field (for
-/// [`merge`]).
+/// handing every later frame to `emit` — with its field ([`Synthesizer::field`]) when
+/// `with_field` (for [`merge`]).
 fn pass(
     source: &Source,
     params: &Params,
     seq: &[usize],
     coverage: Coverage<'_>,
-    debug: bool,
-    emit: &mut dyn FnMut(usize, SynthFrame) -> Result<()>,
+    with_field: bool,
+    emit: &mut dyn FnMut(usize, SynthFrame, Option<Plane<[f32; 4]>>) -> Result<()>,
 ) -> Result<()> {
     let stream = GuideStream::new(seq.len(), |k| coverage(seq[k]), params.guide())?;
     let mut synth = Synthesizer::new(source.clone(), params.clone())?;
     synth.set_target_extent(stream.extent_scale());
-    synth.set_debug(debug);
     for (k, g) in stream.enumerate() {
         let g = g?;
         if k == 0 {
             synth.begin_at_source(&g)?;
         } else {
-            emit(seq[k], synth.step(&g)?)?;
+            let out = synth.step(&g)?;
+            let field = if with_field { synth.field() } else { None };
+            emit(seq[k], out, field)?;
         }
     }
     Ok(())
@@ -237,10 +238,9 @@ fn pass(
 
 /// Frame j between keyframes A and B: each pixel from the forward pass `fwd` (painting A) or
 /// the backward pass `back` (painting B), by the cellular noise of its position in painting A
-/// against `t = (j − A)/(B − A)` (module docs).
-fn merge(fwd: SynthFrame, back: KeyedFrame, t: f32, seed: u64) -> KeyedFrame {
+/// (`field`, the forward pass's) against `t = (j − A)/(B − A)` (module docs).
+fn merge(fwd: SynthFrame, field: Option<&Plane<[f32; 4]>>, back: KeyedFrame, t: f32, seed: u64) -> KeyedFrame {
     let (w, h) = fwd.rgb.size();
-    let field = fwd.debug.as_ref().map(|d| &d.field);
     let rgb = Plane::from_fn(w, h, |x, y| {
         let p = field.map(|f| f.get(x, y)).filter(|m| m[1].is_finite()).map_or((x as f32, y as f32), |m| (m[1], m[2]));
         let (a, b) = (fwd.rgb.get(x, y), back.rgb.get(x, y));

@@ -389,6 +389,15 @@ impl Synthesizer {
         self.debug = on;
     }
 
+    /// The last frame's final field per target pixel, in the form of [`DebugViews::field`]:
+    /// (i, x, y, θ), NaN where there is no match. `None` before the first frame and after a
+    /// frame with nothing to paint.
+    pub fn field(&self) -> Option<Plane<[f32; 4]>> {
+        let (prev, full) = (self.prev.as_ref()?, self.size?);
+        let place = Placement { full, win: (prev.origin.0, prev.origin.1, prev.nnf0.w, prev.nnf0.h) };
+        Some(place.raw(&prev.nnf0))
+    }
+
     /// Index of the next frame.
     pub fn frame(&self) -> usize {
         self.frame
