@@ -53,6 +53,10 @@ pub struct SynthFlags {
     /// EM iterations per level, coarsest first; the last repeats [default: 4,2,1].
     #[arg(long, value_name = "LIST")]
     pub opt_iterations: Option<String>,
+    /// PatchMatch random-search shrink factor α: the search window shrinks by α at each
+    /// draw, in (0, 1) [default: 0.75].
+    #[arg(long, value_name = "A")]
+    pub patchmatch_alpha: Option<f32>,
     /// Exemplar frame step [default: the exemplar's recommendation].
     #[arg(long, value_name = "N")]
     pub src_speed: Option<usize>,
@@ -170,6 +174,9 @@ impl SynthFlags {
         if let Some(s) = &self.opt_iterations {
             b = b.opt_iters(parse_list("opt-iterations", s)?);
         }
+        if let Some(v) = self.patchmatch_alpha {
+            b = b.alpha(v);
+        }
         if let Some(v) = self.src_speed {
             b = b.src_speed(v);
         }
@@ -221,6 +228,7 @@ impl SynthFlags {
         push("time-blur-sigma", self.time_blur_sigma.map(|v| v.to_string()));
         push("patchmatch-iterations", self.patchmatch_iterations.clone());
         push("opt-iterations", self.opt_iterations.clone());
+        push("patchmatch-alpha", self.patchmatch_alpha.map(|v| v.to_string()));
         push("src-speed", self.src_speed.map(|v| v.to_string()));
         push("src-scale", self.src_scale.map(|v| v.to_string()));
         push("target-scale", self.target_scale.map(|v| v.to_string()));
@@ -364,6 +372,7 @@ mod tests {
             lambda: Some(1.0 / 3.0),
             occ_radius: Some(3),
             patchmatch_iterations: Some("6,4".into()),
+            patchmatch_alpha: Some(0.6),
             prev_modulation_bounds: Some("10,2".into()),
             vote_sigma: Some(0.0),
             estimate_sigma: Some(0.5),
@@ -390,5 +399,10 @@ mod tests {
         assert_eq!(f.params().unwrap().prev_bounds(), (2.0, 10.0));
         let f = SynthFlags { patchmatch_iterations: Some("6,x".into()), ..Default::default() };
         assert!(f.params().is_err());
+        let f = SynthFlags { patchmatch_alpha: Some(0.6), ..Default::default() };
+        let want = SynthFlags::default().params().unwrap().to_builder().alpha(0.6).build().unwrap();
+        assert_eq!(f.params().unwrap(), want);
+        let f = SynthFlags { patchmatch_alpha: Some(1.0), ..Default::default() };
+        assert!(f.params().unwrap_err().to_string().contains("patchmatch-alpha"));
     }
 }
