@@ -1,6 +1,7 @@
-//! Lottie (Bodymovin JSON) input, in three steps like usvg/velato: [`schema`] (serde mirror of
-//! the JSON, tolerant of 4.x and 5.x layouts) → [`model`] (resolved layers, transforms and
-//! shapes whose [`value::Value`]s `evaluate(frame)`) → [`render`] (tiny-skia, no JSON).
+//! Lottie (Bodymovin JSON) input, in three steps like usvg/velato: `schema` (serde mirror of
+//! the JSON, shape items tagged by `ty`, tolerant of 4.x and 5.x layouts) → `model` (resolved
+//! layers, transforms and shapes whose values `evaluate(frame)`, built once by [`parse`]) →
+//! [`render()`] (tiny-skia, no JSON; `geom` holds the path geometry).
 //!
 //! Supported: shape, solid, null and precomp layers (assets, nesting, reuse, time remap,
 //! `ip`/`op`/`st`/`sr`, parenting in any order, hidden layers); layer and group transforms
@@ -21,20 +22,22 @@
 //! drawable layer inside a top-level precomp is a region of its own, named `outer/inner`.
 //! A region's `visible` range comes from the layers' in and out points.
 
-pub mod geom;
-pub mod model;
-pub mod nesting;
-pub mod render;
-pub mod schema;
-pub mod value;
+mod geom;
+mod model;
+mod nesting;
+mod render;
+mod schema;
+mod value;
+
+pub use model::Model;
+pub use render::{Pass, Target, render};
 
 use super::{
     Animation, Background, LoadOptions, MAX_FRAMES, MAX_SIDE, Region, RegionFrame, RegionKind, RegionRenderer,
 };
 use crate::error::{Error, Result};
 use crate::img::{Plane, Rgba};
-use model::{Composition, Content, Model, Shape};
-use render::{Pass, Target};
+use model::{Composition, Content, Shape};
 use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
@@ -116,11 +119,6 @@ pub fn parse(path: &Path, text: &str) -> Result<Model> {
     Ok(model::build(&root, w as f32, h as f32, fr as f32, ip as f32, op as f32))
 }
 
-/// Number of frames of a model.
-pub fn frame_count(model: &Model) -> usize {
-    (model.op - model.ip).ceil().max(0.0) as usize
-}
-
 fn has_strokes(model: &Model, items: &[Shape]) -> bool {
     let _ = model;
     items.iter().any(|s| match s {
@@ -193,7 +191,7 @@ fn is_background(model: &Model, li: usize) -> Option<[f32; 4]> {
         return None;
     }
     // Check coverage and opacity at a few times.
-    let n = frame_count(model);
+    let n = model.frame_count();
     for f in [0, n / 2, n.saturating_sub(1)] {
         let t = model.ip + f as f32;
         let lt = l.local_time(t);
@@ -231,7 +229,7 @@ fn is_background(model: &Model, li: usize) -> Option<[f32; 4]> {
 
 /// Frame range (0-based) of composition times `[ip, op)`.
 fn frame_range(model: &Model, ip: f32, op: f32) -> std::ops::Range<usize> {
-    let n = frame_count(model) as f32;
+    let n = model.frame_count() as f32;
     let s = (ip - model.ip).ceil().clamp(0.0, n);
     let e = (op - model.ip).ceil().clamp(0.0, n);
     let (s, e) = (s as usize, e as usize);
@@ -239,7 +237,7 @@ fn frame_range(model: &Model, ip: f32, op: f32) -> std::ops::Range<usize> {
 }
 
 /// The renderer behind a loaded Lottie [`Animation`].
-pub struct LottieRenderer {
+struct LottieRenderer {
     model: Arc<Model>,
     targets: Vec<Target>,
     strokes: Vec<bool>,
@@ -250,7 +248,7 @@ pub struct LottieRenderer {
 
 /// Converts a premultiplied pixmap into straight RGBA in `0..=1` (one sequential pass; at
 /// large sizes this conversion, not the rasterization, dominates the cost of a frame).
-pub fn to_plane(pm: &tiny_skia::Pixmap) -> Plane<Rgba> {
+pub(crate) fn to_plane(pm: &tiny_skia::Pixmap) -> Plane<Rgba> {
     let data = pm
         .pixels()
         .iter()
@@ -270,7 +268,7 @@ pub fn to_plane(pm: &tiny_skia::Pixmap) -> Plane<Rgba> {
 
 impl LottieRenderer {
     /// Renders a region at composition frame `frame` (0-based) in one pass, at the loaded size.
-    pub fn render_pass(&self, region: usize, frame: usize, pass: Pass) -> tiny_skia::Pixmap {
+    fn render_pass(&self, region: usize, frame: usize, pass: Pass) -> tiny_skia::Pixmap {
         render::render(
             &self.model,
             self.targets[region],
@@ -280,11 +278,6 @@ impl LottieRenderer {
             self.scale,
             pass,
         )
-    }
-
-    /// The model.
-    pub fn model(&self) -> &Model {
-        &self.model
     }
 }
 
@@ -343,7 +336,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Animation> {
 pub fn from_model(path: &Path, model: Model, options: &LoadOptions) -> Result<Animation> {
     let (width, height) = super::scaled_canvas(path, model.width, model.height, options.scale)?;
     nesting::check_work(path, &model, width, height)?;
-    let frames = frame_count(&model);
+    let frames = model.frame_count();
     let root = &model.comps[0];
     let mut warnings: Vec<String> = model.warnings.clone();
     if root.layers.is_empty() {
