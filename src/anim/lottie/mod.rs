@@ -342,74 +342,8 @@ pub fn from_model(path: &Path, model: Model, options: &LoadOptions) -> Result<An
     if root.layers.is_empty() {
         return Err(Error::Empty { path: path.to_path_buf(), what: "the animation has no layers".into() });
     }
-    // Background: the bottom-most run of full-canvas solids.
-    let mut background = None;
-    let mut bg_layers = Vec::new();
-    for li in (0..root.layers.len()).rev() {
-        let l = &root.layers[li];
-        if l.hidden || draws_nothing(l) {
-            continue;
-        }
-        match is_background(&model, li) {
-            Some(color) => {
-                bg_layers.push(li);
-                background = Some(Background { name: l.name.clone(), color });
-            }
-            None => break,
-        }
-    }
-    let mut specs: Vec<(Target, String, RegionKind, std::ops::Range<usize>, usize)> = Vec::new();
-    for (li, l) in root.layers.iter().enumerate() {
-        if bg_layers.contains(&li) || l.is_matte_source || l.ty == 3 {
-            continue;
-        }
-        if l.hidden {
-            continue;
-        }
-        if draws_nothing(l) {
-            for w in &l.warnings {
-                if !warnings.contains(w) {
-                    warnings.push(w.clone());
-                }
-            }
-            continue;
-        }
-        let visible = frame_range(&model, l.ip, l.op);
-        match (&l.content, options.split_precomps) {
-            (Content::Precomp { comp, .. }, true) => {
-                let inner = &model.comps[*comp];
-                for (ci, c) in inner.layers.iter().enumerate() {
-                    if c.is_matte_source || c.hidden || draws_nothing(c) {
-                        continue;
-                    }
-                    // Child in/out points in outer composition time (no time remap).
-                    let vis = if l.time_remap.is_some() {
-                        visible.clone()
-                    } else {
-                        let (a, b) = (c.ip * l.sr + l.st, c.op * l.sr + l.st);
-                        let (a, b) = if a <= b { (a, b) } else { (b, a) };
-                        let r = frame_range(&model, a.max(l.ip), b.min(l.op));
-                        if r.is_empty() { r.start..r.start } else { r }
-                    };
-                    specs.push((
-                        Target { layer: li, child: Some(ci) },
-                        format!("{}/{}", l.name, c.name),
-                        RegionKind::PrecompChild,
-                        vis,
-                        ci,
-                    ));
-                }
-            }
-            (content, _) => {
-                let kind = match content {
-                    Content::Precomp { .. } => RegionKind::Precomp,
-                    Content::Solid { .. } => RegionKind::Solid,
-                    _ => RegionKind::Shape,
-                };
-                specs.push((Target { layer: li, child: None }, l.name.clone(), kind, visible, li));
-            }
-        }
-    }
+    let (background, bg_layers) = background(&model);
+    let specs = region_specs(&model, &bg_layers, options.split_precomps, &mut warnings);
     if specs.is_empty() {
         return Err(Error::Empty {
             path: path.to_path_buf(),
@@ -422,33 +356,26 @@ pub fn from_model(path: &Path, model: Model, options: &LoadOptions) -> Result<An
     let mut targets = Vec::with_capacity(specs.len());
     let mut strokes = Vec::with_capacity(specs.len());
     let mut names: Vec<String> = Vec::new();
-    for (n, (target, name, kind, visible, _)) in specs.into_iter().enumerate() {
-        let mut unique = name.clone();
+    for (n, spec) in specs.into_iter().enumerate() {
+        let mut unique = spec.name.clone();
         let mut k = 2;
         while names.contains(&unique) {
-            unique = format!("{name} ({k})");
+            unique = format!("{} ({k})", spec.name);
             k += 1;
         }
         names.push(unique.clone());
-        let l = &root.layers[target.layer];
-        let mut w = Vec::new();
-        let has = match (target.child, &l.content) {
-            (Some(ci), Content::Precomp { comp, .. }) => {
-                let inner = &model.comps[*comp];
-                for x in &l.warnings {
-                    w.push(x.clone());
-                }
-                collect_warnings(&model, inner, ci, &mut w, &mut Vec::new());
-                layer_has_strokes(&model, inner, ci, &mut HashMap::new())
-            }
-            _ => {
-                collect_warnings(&model, root, target.layer, &mut w, &mut Vec::new());
-                layer_has_strokes(&model, root, target.layer, &mut HashMap::new())
-            }
-        };
-        let color = dominant_color(&model, target, &visible).unwrap_or([1.0, 1.0, 1.0, 1.0]);
-        regions.push(Region { index: n + 1, name: unique, kind, visible, color, has_strokes: has, warnings: w });
-        targets.push(target);
+        let (w, has) = region_warnings_and_strokes(&model, spec.target);
+        let color = dominant_color(&model, spec.target, &spec.visible).unwrap_or([1.0, 1.0, 1.0, 1.0]);
+        regions.push(Region {
+            index: n + 1,
+            name: unique,
+            kind: spec.kind,
+            visible: spec.visible,
+            color,
+            has_strokes: has,
+            warnings: w,
+        });
+        targets.push(spec.target);
         strokes.push(has);
     }
     let fps = model.fps as f64;
@@ -464,4 +391,112 @@ pub fn from_model(path: &Path, model: Model, options: &LoadOptions) -> Result<An
         warnings,
         Box::new(renderer),
     ))
+}
+
+/// The background: the bottom-most run of full-canvas solids (its top-most layer names it),
+/// and the root layers it is made of.
+fn background(model: &Model) -> (Option<Background>, Vec<usize>) {
+    let root = &model.comps[0];
+    let mut background = None;
+    let mut bg_layers = Vec::new();
+    for li in (0..root.layers.len()).rev() {
+        let l = &root.layers[li];
+        if l.hidden || draws_nothing(l) {
+            continue;
+        }
+        match is_background(model, li) {
+            Some(color) => {
+                bg_layers.push(li);
+                background = Some(Background { name: l.name.clone(), color });
+            }
+            None => break,
+        }
+    }
+    (background, bg_layers)
+}
+
+/// A region before its name is made unique.
+struct Spec {
+    target: Target,
+    name: String,
+    kind: RegionKind,
+    visible: std::ops::Range<usize>,
+}
+
+/// The regions of the root layers, top-most first: every layer that draws something, except
+/// the background, matte sources, nulls and hidden layers; with `split`, each drawable layer
+/// inside a top-level precomp. Warnings of layers that draw nothing go to `warnings`.
+fn region_specs(model: &Model, bg_layers: &[usize], split: bool, warnings: &mut Vec<String>) -> Vec<Spec> {
+    let root = &model.comps[0];
+    let mut specs = Vec::new();
+    for (li, l) in root.layers.iter().enumerate() {
+        if bg_layers.contains(&li) || l.is_matte_source || l.ty == 3 || l.hidden {
+            continue;
+        }
+        if draws_nothing(l) {
+            for w in &l.warnings {
+                if !warnings.contains(w) {
+                    warnings.push(w.clone());
+                }
+            }
+            continue;
+        }
+        let visible = frame_range(model, l.ip, l.op);
+        match (&l.content, split) {
+            (Content::Precomp { comp, .. }, true) => {
+                let inner = &model.comps[*comp];
+                for (ci, c) in inner.layers.iter().enumerate() {
+                    if c.is_matte_source || c.hidden || draws_nothing(c) {
+                        continue;
+                    }
+                    // Child in/out points in outer composition time (no time remap).
+                    let vis = if l.time_remap.is_some() {
+                        visible.clone()
+                    } else {
+                        let (a, b) = (c.ip * l.sr + l.st, c.op * l.sr + l.st);
+                        let (a, b) = if a <= b { (a, b) } else { (b, a) };
+                        let r = frame_range(model, a.max(l.ip), b.min(l.op));
+                        if r.is_empty() { r.start..r.start } else { r }
+                    };
+                    specs.push(Spec {
+                        target: Target { layer: li, child: Some(ci) },
+                        name: format!("{}/{}", l.name, c.name),
+                        kind: RegionKind::PrecompChild,
+                        visible: vis,
+                    });
+                }
+            }
+            (content, _) => {
+                let kind = match content {
+                    Content::Precomp { .. } => RegionKind::Precomp,
+                    Content::Solid { .. } => RegionKind::Solid,
+                    _ => RegionKind::Shape,
+                };
+                specs.push(Spec { target: Target { layer: li, child: None }, name: l.name.clone(), kind, visible });
+            }
+        }
+    }
+    specs
+}
+
+/// The warnings of a region's layers, and whether it strokes anything.
+fn region_warnings_and_strokes(model: &Model, target: Target) -> (Vec<String>, bool) {
+    let root = &model.comps[0];
+    let l = &root.layers[target.layer];
+    let mut w = Vec::new();
+    let has = match (target.child, &l.content) {
+        (Some(ci), Content::Precomp { comp, .. }) => {
+            let inner = &model.comps[*comp];
+            for x in &l.warnings {
+                w.push(x.clone());
+            }
+            collect_warnings(model, inner, ci, &mut w, &mut Vec::new());
+            layer_has_strokes(model, inner, ci, &mut HashMap::new())
+        }
+        _ => {
+            collect_warnings(model, root, target.layer, &mut w, &mut Vec::new());
+            layer_has_strokes(model, root, target.layer, &mut HashMap::new())
+        }
+    };
+    (w, has)
 }
