@@ -11,6 +11,10 @@
 //! and a shape item that cannot be read is kept as its type's default with the reason in
 //! [`ShapeEntry::error`]. Only a structure that is wrong as a whole (a transform that is a
 //! number, `layers` that is not a list) fails the file.
+//!
+//! Keys that are only skipped (`a`, `nm`, …) are declared anyway, in their usual order: serde
+//! also reads a struct from an array, by position, and a property written as an array must
+//! read the same as before.
 
 use super::geom::Bez;
 use super::value::Color;
@@ -285,6 +289,9 @@ fn expression<'de, D: Deserializer<'de>>(d: D) -> Result<bool, D::Error> {
 #[derive(Deserialize, Debug, Clone)]
 #[serde(bound(deserialize = "T: FromJson"))]
 pub struct Prop<T> {
+    /// Animated flag (optional in old files; the shape of `k` decides).
+    #[serde(default, rename = "a")]
+    _a: Option<IgnoredAny>,
     /// The value or the keyframes.
     #[serde(default = "Option::default", deserialize_with = "keyed")]
     pub k: Option<Value<T>>,
@@ -296,9 +303,9 @@ pub struct Prop<T> {
 /// A position: one 2D property, or split (`"s": true`) into `x` and `y` properties.
 #[derive(Deserialize, Debug, Clone, Default)]
 pub struct Position {
-    /// Split into `x` and `y`.
-    #[serde(default, deserialize_with = "split")]
-    pub s: bool,
+    /// Animated flag (not split).
+    #[serde(default, rename = "a")]
+    _a: Option<IgnoredAny>,
     /// The value or the keyframes (not split).
     #[serde(default, deserialize_with = "keyed")]
     pub k: Option<Value<Vec2>>,
@@ -308,6 +315,9 @@ pub struct Position {
     /// The Y component (split).
     #[serde(default, deserialize_with = "component")]
     pub y: Option<Prop<f32>>,
+    /// Split into `x` and `y`.
+    #[serde(default, deserialize_with = "split")]
+    pub s: bool,
 }
 
 /// The `x` of a [`Position`]: an expression when not split, a component when split.
@@ -339,6 +349,9 @@ fn split_x<'de, D: Deserializer<'de>>(d: D) -> Result<SplitX, D::Error> {
 /// The root object of a Lottie file.
 #[derive(Deserialize, Debug, Default)]
 pub struct Root {
+    /// Bodymovin version that wrote the file.
+    #[serde(default, rename = "v")]
+    _v: Option<IgnoredAny>,
     /// Frame rate.
     #[serde(default, deserialize_with = "num")]
     pub fr: Option<f64>,
@@ -357,11 +370,17 @@ pub struct Root {
     /// 3D flag.
     #[serde(default, deserialize_with = "num")]
     pub ddd: Option<f64>,
+    /// The name of the composition.
+    #[serde(default, rename = "nm")]
+    _nm: Option<IgnoredAny>,
     /// Top-level layers, top-most first.
     pub layers: Option<Vec<Layer>>,
     /// Precompositions and images.
     #[serde(default)]
     pub assets: Vec<Asset>,
+    /// Fonts for text (not supported).
+    #[serde(default, rename = "fonts")]
+    _fonts: Option<IgnoredAny>,
     /// Character glyphs for text (not supported; only noticed).
     #[serde(default, deserialize_with = "non_empty")]
     pub chars: bool,
@@ -494,6 +513,9 @@ pub struct Transform {
 /// A mask of `masksProperties`.
 #[derive(Deserialize, Debug, Clone)]
 pub struct Mask {
+    /// Name.
+    #[serde(default, rename = "nm")]
+    _nm: Option<IgnoredAny>,
     /// Mode: `a` add, `s` subtract, `i` intersect, `l` lighten, `d` darken, `f` difference, `n` none.
     #[serde(default, deserialize_with = "text")]
     pub mode: Option<String>,
@@ -529,8 +551,8 @@ pub struct ShapeEntry {
 impl<'de> Deserialize<'de> for ShapeEntry {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let v = Json::deserialize(d)?;
-        let ty = v.get("ty").and_then(text_of).unwrap_or_default();
-        let hidden = v.get("hd").is_some_and(flag_of);
+        let Header { ty, hd: hidden, .. } = Header::deserialize(&v).unwrap_or_default();
+        let ty = ty.unwrap_or_default();
         let (shape, error) = match Shape::deserialize(&v) {
             Ok(shape) => (shape, None),
             Err(e) => match Shape::default_of(&ty) {
@@ -540,6 +562,17 @@ impl<'de> Deserialize<'de> for ShapeEntry {
         };
         Ok(ShapeEntry { ty, hidden, shape, error })
     }
+}
+
+/// The keys every shape item has, read on their own (a malformed item keeps them).
+#[derive(Deserialize, Default)]
+struct Header {
+    #[serde(default, deserialize_with = "text")]
+    ty: Option<String>,
+    #[serde(default, rename = "nm")]
+    _nm: Option<IgnoredAny>,
+    #[serde(default, deserialize_with = "flag")]
+    hd: bool,
 }
 
 /// A shape item, by its `ty`.
