@@ -7,14 +7,14 @@
 //!
 //! - `region_frames`: through `Animation::render`, as the pipeline calls it (fills and, where a
 //!   region has them, strokes, each converted to a full-canvas straight-RGBA `f32` plane);
-//! - `pixmaps`: the rasterizer alone (`lottie::render::render` of every root layer, regions
+//! - `pixmaps`: the rasterizer alone (`lottie::render` of every root layer, regions
 //!   or not, fills and strokes in one premultiplied 8-bit pixmap), which shows how much of
 //!   the cost is the conversion.
 //!
 //! `cargo bench --bench rasterize`
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use fluidymation::anim::lottie::{self, render};
+use fluidymation::anim::lottie;
 use fluidymation::anim::{self, LoadOptions};
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -31,14 +31,15 @@ fn bench(c: &mut Criterion) {
             let text = std::fs::read_to_string(&path).expect("readable");
             let model = lottie::parse(&path, &text).expect("parses");
             let (w, h) = (a.width, a.height);
-            let layers = model.comps[0].layers.len();
+            let layers = model.layer_count();
             b.iter_custom(|iters| {
                 let start = Instant::now();
                 for _ in 0..iters {
                     for f in 0..frames {
                         for l in 0..layers {
-                            let t = render::Target { layer: l, child: None };
-                            let pm = render::render(&model, t, model.ip + f as f32, w, h, 1.0, render::Pass::All);
+                            let t = lottie::Target { layer: l, child: None };
+                            let pm =
+                                lottie::render(&model, t, model.first_frame() + f as f32, w, h, 1.0, lottie::Pass::All);
                             std::hint::black_box(pm);
                         }
                     }

@@ -11,7 +11,7 @@
 //! expected | difference | actual side by side. Set `LOTTIE_CONFORMANCE_REPORT=1` to print
 //! the per-file table even when everything passes.
 
-use fluidymation::anim::lottie::{self, render};
+use fluidymation::anim::lottie;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -130,7 +130,7 @@ fn lottie_conformance_against_thorvg() {
         let Ok(index) = std::fs::read_to_string(&index) else { continue };
         let text = std::fs::read_to_string(case_path).unwrap();
         let model = lottie::parse(case_path, &text).unwrap_or_else(|e| panic!("{case}: {e}"));
-        let (w, h) = (model.width.round() as u32, model.height.round() as u32);
+        let (w, h) = (model.width().round() as u32, model.height().round() as u32);
         for row in index.lines().skip(1) {
             let cols: Vec<&str> = row.split('\t').collect();
             if cols.len() < 4 {
@@ -140,8 +140,8 @@ fn lottie_conformance_against_thorvg() {
             let frame: usize = cols[2].parse().unwrap();
             let (rw, rh, expected) = load_gray(&dir.join("refs").join(&case).join(cols[3]));
             assert_eq!((rw, rh), (w, h), "{case}: reference size");
-            let target = render::Target { layer, child: None };
-            let pm = render::render(&model, target, model.ip + frame as f32, w, h, 1.0, render::Pass::All);
+            let target = lottie::Target { layer, child: None };
+            let pm = lottie::render(&model, target, model.first_frame() + frame as f32, w, h, 1.0, lottie::Pass::All);
             let actual: Vec<u8> = pm.pixels().iter().map(|p| p.alpha()).collect();
             let iou = soft_iou(&expected, &actual, w as usize, h as usize);
             let (se, sa) = (

@@ -188,7 +188,7 @@ fn check(dir: &Path) {
     let Ok(text) = std::fs::read_to_string(&path) else { return };
     let Ok(model) = lottie::parse(&path, &text) else { return };
     // Small renders keep the run fast; the geometry code runs all the same.
-    let scale = (48.0 / model.width.max(model.height).max(1.0)).min(1.0);
+    let scale = (48.0 / model.width().max(model.height()).max(1.0)).min(1.0);
     let opts = LoadOptions { scale, split_precomps: path.ends_with("case-split.json") };
     let Ok(anim) = lottie::from_model(&path, model, &opts) else { return };
     assert!(anim.width >= 1 && anim.height >= 1 && anim.frames >= 1);

@@ -3,12 +3,9 @@
 //! rounded corners, affine transforms and conversion to tiny-skia paths.
 
 use glam::{Affine2, Vec2};
-use serde_json::Value as Json;
 
 /// Kappa for approximating a quarter circle with a cubic.
 pub const KAPPA: f32 = 0.552_284_8;
-/// Largest vertex count of one path accepted from a file (safety limit).
-pub const MAX_VERTICES: usize = 100_000;
 
 /// One Lottie bezier path: vertices `v`, in-tangents `i` and out-tangents `o` relative to
 /// their vertex; closed paths have a segment from the last vertex back to the first.
@@ -24,35 +21,10 @@ pub struct Bez {
     pub o: Vec<Vec2>,
 }
 
-fn points(v: Option<&Json>) -> Option<Vec<Vec2>> {
-    let a = v?.as_array()?;
-    if a.len() > MAX_VERTICES {
-        return None;
-    }
-    a.iter()
-        .map(|p| {
-            let p = p.as_array()?;
-            Some(Vec2::new(p.first()?.as_f64()? as f32, p.get(1)?.as_f64()? as f32))
-        })
-        .collect()
-}
-
 /// A cubic segment: start, two control points, end.
 pub type Cubic = [Vec2; 4];
 
 impl Bez {
-    /// Reads `{"c": bool, "v": [...], "i": [...], "o": [...]}`.
-    pub fn from_json_object(v: &Json) -> Option<Bez> {
-        let verts = points(v.get("v"))?;
-        let n = verts.len();
-        let mut inn = points(v.get("i")).unwrap_or_default();
-        let mut out = points(v.get("o")).unwrap_or_default();
-        inn.resize(n, Vec2::ZERO);
-        out.resize(n, Vec2::ZERO);
-        let closed = v.get("c").is_some_and(|c| c.as_bool() == Some(true) || c.as_f64().is_some_and(|x| x != 0.0));
-        Some(Bez { closed, v: verts, i: inn, o: out })
-    }
-
     /// Interpolates vertex by vertex (paths with different vertex counts do not morph).
     pub fn lerp(&self, other: &Bez, t: f32) -> Bez {
         if self.v.len() != other.v.len() {
@@ -155,17 +127,6 @@ impl Bez {
         if self.closed {
             pb.close();
         }
-    }
-
-    /// Signed area of the control polygon (sign gives the winding direction).
-    pub fn signed_area(&self) -> f32 {
-        let n = self.v.len();
-        let mut a = 0.0;
-        for k in 0..n {
-            let (p, q) = (self.v[k], self.v[(k + 1) % n]);
-            a += p.x * q.y - q.x * p.y;
-        }
-        0.5 * a
     }
 }
 

@@ -1,6 +1,7 @@
-//! Lottie (Bodymovin JSON) input, in three steps like usvg/velato: [`schema`] (serde mirror of
-//! the JSON, tolerant of 4.x and 5.x layouts) → [`model`] (resolved layers, transforms and
-//! shapes whose [`value::Value`]s `evaluate(frame)`) → [`render`] (tiny-skia, no JSON).
+//! Lottie (Bodymovin JSON) input, in three steps like usvg/velato: `schema` (serde mirror of
+//! the JSON, shape items tagged by `ty`, tolerant of 4.x and 5.x layouts) → `model` (resolved
+//! layers, transforms and shapes whose values `evaluate(frame)`, built once by [`parse`]) →
+//! [`render()`] (tiny-skia, no JSON; `geom` holds the path geometry).
 //!
 //! Supported: shape, solid, null and precomp layers (assets, nesting, reuse, time remap,
 //! `ip`/`op`/`st`/`sr`, parenting in any order, hidden layers); layer and group transforms
@@ -21,20 +22,22 @@
 //! drawable layer inside a top-level precomp is a region of its own, named `outer/inner`.
 //! A region's `visible` range comes from the layers' in and out points.
 
-pub mod geom;
-pub mod model;
-pub mod nesting;
-pub mod render;
-pub mod schema;
-pub mod value;
+mod geom;
+mod model;
+mod nesting;
+mod render;
+mod schema;
+mod value;
+
+pub use model::Model;
+pub use render::{Pass, Target, render};
 
 use super::{
     Animation, Background, LoadOptions, MAX_FRAMES, MAX_SIDE, Region, RegionFrame, RegionKind, RegionRenderer,
 };
 use crate::error::{Error, Result};
 use crate::img::{Plane, Rgba};
-use model::{Composition, Content, Model, Shape};
-use render::{Pass, Target};
+use model::{Composition, Content, Shape};
 use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
@@ -116,11 +119,6 @@ pub fn parse(path: &Path, text: &str) -> Result<Model> {
     Ok(model::build(&root, w as f32, h as f32, fr as f32, ip as f32, op as f32))
 }
 
-/// Number of frames of a model.
-pub fn frame_count(model: &Model) -> usize {
-    (model.op - model.ip).ceil().max(0.0) as usize
-}
-
 fn has_strokes(model: &Model, items: &[Shape]) -> bool {
     let _ = model;
     items.iter().any(|s| match s {
@@ -193,7 +191,7 @@ fn is_background(model: &Model, li: usize) -> Option<[f32; 4]> {
         return None;
     }
     // Check coverage and opacity at a few times.
-    let n = frame_count(model);
+    let n = model.frame_count();
     for f in [0, n / 2, n.saturating_sub(1)] {
         let t = model.ip + f as f32;
         let lt = l.local_time(t);
@@ -231,7 +229,7 @@ fn is_background(model: &Model, li: usize) -> Option<[f32; 4]> {
 
 /// Frame range (0-based) of composition times `[ip, op)`.
 fn frame_range(model: &Model, ip: f32, op: f32) -> std::ops::Range<usize> {
-    let n = frame_count(model) as f32;
+    let n = model.frame_count() as f32;
     let s = (ip - model.ip).ceil().clamp(0.0, n);
     let e = (op - model.ip).ceil().clamp(0.0, n);
     let (s, e) = (s as usize, e as usize);
@@ -239,7 +237,7 @@ fn frame_range(model: &Model, ip: f32, op: f32) -> std::ops::Range<usize> {
 }
 
 /// The renderer behind a loaded Lottie [`Animation`].
-pub struct LottieRenderer {
+struct LottieRenderer {
     model: Arc<Model>,
     targets: Vec<Target>,
     strokes: Vec<bool>,
@@ -250,7 +248,7 @@ pub struct LottieRenderer {
 
 /// Converts a premultiplied pixmap into straight RGBA in `0..=1` (one sequential pass; at
 /// large sizes this conversion, not the rasterization, dominates the cost of a frame).
-pub fn to_plane(pm: &tiny_skia::Pixmap) -> Plane<Rgba> {
+pub(crate) fn to_plane(pm: &tiny_skia::Pixmap) -> Plane<Rgba> {
     let data = pm
         .pixels()
         .iter()
@@ -270,7 +268,7 @@ pub fn to_plane(pm: &tiny_skia::Pixmap) -> Plane<Rgba> {
 
 impl LottieRenderer {
     /// Renders a region at composition frame `frame` (0-based) in one pass, at the loaded size.
-    pub fn render_pass(&self, region: usize, frame: usize, pass: Pass) -> tiny_skia::Pixmap {
+    fn render_pass(&self, region: usize, frame: usize, pass: Pass) -> tiny_skia::Pixmap {
         render::render(
             &self.model,
             self.targets[region],
@@ -280,11 +278,6 @@ impl LottieRenderer {
             self.scale,
             pass,
         )
-    }
-
-    /// The model.
-    pub fn model(&self) -> &Model {
-        &self.model
     }
 }
 
@@ -343,80 +336,14 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Animation> {
 pub fn from_model(path: &Path, model: Model, options: &LoadOptions) -> Result<Animation> {
     let (width, height) = super::scaled_canvas(path, model.width, model.height, options.scale)?;
     nesting::check_work(path, &model, width, height)?;
-    let frames = frame_count(&model);
+    let frames = model.frame_count();
     let root = &model.comps[0];
     let mut warnings: Vec<String> = model.warnings.clone();
     if root.layers.is_empty() {
         return Err(Error::Empty { path: path.to_path_buf(), what: "the animation has no layers".into() });
     }
-    // Background: the bottom-most run of full-canvas solids.
-    let mut background = None;
-    let mut bg_layers = Vec::new();
-    for li in (0..root.layers.len()).rev() {
-        let l = &root.layers[li];
-        if l.hidden || draws_nothing(l) {
-            continue;
-        }
-        match is_background(&model, li) {
-            Some(color) => {
-                bg_layers.push(li);
-                background = Some(Background { name: l.name.clone(), color });
-            }
-            None => break,
-        }
-    }
-    let mut specs: Vec<(Target, String, RegionKind, std::ops::Range<usize>, usize)> = Vec::new();
-    for (li, l) in root.layers.iter().enumerate() {
-        if bg_layers.contains(&li) || l.is_matte_source || l.ty == 3 {
-            continue;
-        }
-        if l.hidden {
-            continue;
-        }
-        if draws_nothing(l) {
-            for w in &l.warnings {
-                if !warnings.contains(w) {
-                    warnings.push(w.clone());
-                }
-            }
-            continue;
-        }
-        let visible = frame_range(&model, l.ip, l.op);
-        match (&l.content, options.split_precomps) {
-            (Content::Precomp { comp, .. }, true) => {
-                let inner = &model.comps[*comp];
-                for (ci, c) in inner.layers.iter().enumerate() {
-                    if c.is_matte_source || c.hidden || draws_nothing(c) {
-                        continue;
-                    }
-                    // Child in/out points in outer composition time (no time remap).
-                    let vis = if l.time_remap.is_some() {
-                        visible.clone()
-                    } else {
-                        let (a, b) = (c.ip * l.sr + l.st, c.op * l.sr + l.st);
-                        let (a, b) = if a <= b { (a, b) } else { (b, a) };
-                        let r = frame_range(&model, a.max(l.ip), b.min(l.op));
-                        if r.is_empty() { r.start..r.start } else { r }
-                    };
-                    specs.push((
-                        Target { layer: li, child: Some(ci) },
-                        format!("{}/{}", l.name, c.name),
-                        RegionKind::PrecompChild,
-                        vis,
-                        ci,
-                    ));
-                }
-            }
-            (content, _) => {
-                let kind = match content {
-                    Content::Precomp { .. } => RegionKind::Precomp,
-                    Content::Solid { .. } => RegionKind::Solid,
-                    _ => RegionKind::Shape,
-                };
-                specs.push((Target { layer: li, child: None }, l.name.clone(), kind, visible, li));
-            }
-        }
-    }
+    let (background, bg_layers) = background(&model);
+    let specs = region_specs(&model, &bg_layers, options.split_precomps, &mut warnings);
     if specs.is_empty() {
         return Err(Error::Empty {
             path: path.to_path_buf(),
@@ -429,33 +356,26 @@ pub fn from_model(path: &Path, model: Model, options: &LoadOptions) -> Result<An
     let mut targets = Vec::with_capacity(specs.len());
     let mut strokes = Vec::with_capacity(specs.len());
     let mut names: Vec<String> = Vec::new();
-    for (n, (target, name, kind, visible, _)) in specs.into_iter().enumerate() {
-        let mut unique = name.clone();
+    for (n, spec) in specs.into_iter().enumerate() {
+        let mut unique = spec.name.clone();
         let mut k = 2;
         while names.contains(&unique) {
-            unique = format!("{name} ({k})");
+            unique = format!("{} ({k})", spec.name);
             k += 1;
         }
         names.push(unique.clone());
-        let l = &root.layers[target.layer];
-        let mut w = Vec::new();
-        let has = match (target.child, &l.content) {
-            (Some(ci), Content::Precomp { comp, .. }) => {
-                let inner = &model.comps[*comp];
-                for x in &l.warnings {
-                    w.push(x.clone());
-                }
-                collect_warnings(&model, inner, ci, &mut w, &mut Vec::new());
-                layer_has_strokes(&model, inner, ci, &mut HashMap::new())
-            }
-            _ => {
-                collect_warnings(&model, root, target.layer, &mut w, &mut Vec::new());
-                layer_has_strokes(&model, root, target.layer, &mut HashMap::new())
-            }
-        };
-        let color = dominant_color(&model, target, &visible).unwrap_or([1.0, 1.0, 1.0, 1.0]);
-        regions.push(Region { index: n + 1, name: unique, kind, visible, color, has_strokes: has, warnings: w });
-        targets.push(target);
+        let (w, has) = region_warnings_and_strokes(&model, spec.target);
+        let color = dominant_color(&model, spec.target, &spec.visible).unwrap_or([1.0, 1.0, 1.0, 1.0]);
+        regions.push(Region {
+            index: n + 1,
+            name: unique,
+            kind: spec.kind,
+            visible: spec.visible,
+            color,
+            has_strokes: has,
+            warnings: w,
+        });
+        targets.push(spec.target);
         strokes.push(has);
     }
     let fps = model.fps as f64;
@@ -471,4 +391,112 @@ pub fn from_model(path: &Path, model: Model, options: &LoadOptions) -> Result<An
         warnings,
         Box::new(renderer),
     ))
+}
+
+/// The background: the bottom-most run of full-canvas solids (its top-most layer names it),
+/// and the root layers it is made of.
+fn background(model: &Model) -> (Option<Background>, Vec<usize>) {
+    let root = &model.comps[0];
+    let mut background = None;
+    let mut bg_layers = Vec::new();
+    for li in (0..root.layers.len()).rev() {
+        let l = &root.layers[li];
+        if l.hidden || draws_nothing(l) {
+            continue;
+        }
+        match is_background(model, li) {
+            Some(color) => {
+                bg_layers.push(li);
+                background = Some(Background { name: l.name.clone(), color });
+            }
+            None => break,
+        }
+    }
+    (background, bg_layers)
+}
+
+/// A region before its name is made unique.
+struct Spec {
+    target: Target,
+    name: String,
+    kind: RegionKind,
+    visible: std::ops::Range<usize>,
+}
+
+/// The regions of the root layers, top-most first: every layer that draws something, except
+/// the background, matte sources, nulls and hidden layers; with `split`, each drawable layer
+/// inside a top-level precomp. Warnings of layers that draw nothing go to `warnings`.
+fn region_specs(model: &Model, bg_layers: &[usize], split: bool, warnings: &mut Vec<String>) -> Vec<Spec> {
+    let root = &model.comps[0];
+    let mut specs = Vec::new();
+    for (li, l) in root.layers.iter().enumerate() {
+        if bg_layers.contains(&li) || l.is_matte_source || l.ty == 3 || l.hidden {
+            continue;
+        }
+        if draws_nothing(l) {
+            for w in &l.warnings {
+                if !warnings.contains(w) {
+                    warnings.push(w.clone());
+                }
+            }
+            continue;
+        }
+        let visible = frame_range(model, l.ip, l.op);
+        match (&l.content, split) {
+            (Content::Precomp { comp, .. }, true) => {
+                let inner = &model.comps[*comp];
+                for (ci, c) in inner.layers.iter().enumerate() {
+                    if c.is_matte_source || c.hidden || draws_nothing(c) {
+                        continue;
+                    }
+                    // Child in/out points in outer composition time (no time remap).
+                    let vis = if l.time_remap.is_some() {
+                        visible.clone()
+                    } else {
+                        let (a, b) = (c.ip * l.sr + l.st, c.op * l.sr + l.st);
+                        let (a, b) = if a <= b { (a, b) } else { (b, a) };
+                        let r = frame_range(model, a.max(l.ip), b.min(l.op));
+                        if r.is_empty() { r.start..r.start } else { r }
+                    };
+                    specs.push(Spec {
+                        target: Target { layer: li, child: Some(ci) },
+                        name: format!("{}/{}", l.name, c.name),
+                        kind: RegionKind::PrecompChild,
+                        visible: vis,
+                    });
+                }
+            }
+            (content, _) => {
+                let kind = match content {
+                    Content::Precomp { .. } => RegionKind::Precomp,
+                    Content::Solid { .. } => RegionKind::Solid,
+                    _ => RegionKind::Shape,
+                };
+                specs.push(Spec { target: Target { layer: li, child: None }, name: l.name.clone(), kind, visible });
+            }
+        }
+    }
+    specs
+}
+
+/// The warnings of a region's layers, and whether it strokes anything.
+fn region_warnings_and_strokes(model: &Model, target: Target) -> (Vec<String>, bool) {
+    let root = &model.comps[0];
+    let l = &root.layers[target.layer];
+    let mut w = Vec::new();
+    let has = match (target.child, &l.content) {
+        (Some(ci), Content::Precomp { comp, .. }) => {
+            let inner = &model.comps[*comp];
+            for x in &l.warnings {
+                w.push(x.clone());
+            }
+            collect_warnings(model, inner, ci, &mut w, &mut Vec::new());
+            layer_has_strokes(model, inner, ci, &mut HashMap::new())
+        }
+        _ => {
+            collect_warnings(model, root, target.layer, &mut w, &mut Vec::new());
+            layer_has_strokes(model, root, target.layer, &mut HashMap::new())
+        }
+    };
+    (w, has)
 }

@@ -4,9 +4,8 @@
 
 use super::geom::Bez;
 use super::schema;
-use super::value::{Color, PropError, Value, parse_prop};
+use super::value::{Animatable, Color, Value};
 use glam::{Affine2, Vec2};
-use serde_json::Value as Json;
 use std::collections::HashMap;
 
 /// Deepest precomp nesting followed (protects against reference cycles).
@@ -30,22 +29,22 @@ impl Warn<'_> {
     }
 }
 
-/// Reads a property with a default, warning about expressions and malformed values.
-fn prop<T: super::value::Animatable>(p: Option<&schema::Prop>, default: T, what: &str, w: &mut Warn) -> Value<T> {
+/// Resolves a property with a default, warning about expressions and malformed values.
+fn prop<T: Animatable>(p: Option<&schema::Prop<T>>, default: T, what: &str, w: &mut Warn) -> Value<T> {
     let Some(p) = p else { return Value::Fixed(default) };
-    if let Some(Json::String(x)) = &p.x
-        && !x.is_empty()
-    {
+    if p.x {
         w.add(format!("expressions are not supported ({what}); using its keyframed value"));
     }
-    let Some(k) = &p.k else { return Value::Fixed(default) };
-    match parse_prop(k) {
-        Ok(v) => v,
-        Err(PropError::Expression) | Err(PropError::Malformed) => {
-            w.add(format!("malformed value of '{what}'; using the default"));
-            Value::Fixed(default)
-        }
-    }
+    keyed(p.k.as_ref(), default, what, w)
+}
+
+/// Resolves the `k` of a property (absent: the default).
+fn keyed<T: Animatable>(k: Option<&schema::Value<T>>, default: T, what: &str, w: &mut Warn) -> Value<T> {
+    let Some(k) = k else { return Value::Fixed(default) };
+    Value::from_schema(k).unwrap_or_else(|_| {
+        w.add(format!("malformed value of '{what}'; using the default"));
+        Value::Fixed(default)
+    })
 }
 
 /// A position: one 2D value (with spatial tangents) or split X/Y.
@@ -104,13 +103,17 @@ impl Transform {
     fn from_schema(t: Option<&schema::Transform>, w: &mut Warn) -> Transform {
         let Some(t) = t else { return Transform::default() };
         let position = match &t.p {
-            Some(p) if p.s.as_ref().is_some_and(|s| s.as_bool() == Some(true) || s.as_f64() == Some(1.0)) => {
-                let sub =
-                    |v: &Option<Json>| v.as_ref().and_then(|v| serde_json::from_value::<schema::Prop>(v.clone()).ok());
-                let (x, y) = (sub(&p.x), sub(&p.y));
-                Position::Split(prop(x.as_ref(), 0.0, "position x", w), prop(y.as_ref(), 0.0, "position y", w))
+            Some(p) if p.s => Position::Split(
+                prop(p.x.component.as_ref(), 0.0, "position x", w),
+                prop(p.y.as_ref(), 0.0, "position y", w),
+            ),
+            Some(p) => {
+                if p.x.expression {
+                    w.add("expressions are not supported (position); using its keyframed value");
+                }
+                Position::Combined(keyed(p.k.as_ref(), Vec2::ZERO, "position", w))
             }
-            p => Position::Combined(prop(p.as_ref(), Vec2::ZERO, "position", w)),
+            None => Position::Combined(Value::Fixed(Vec2::ZERO)),
         };
         if t.rx.is_some() || t.ry.is_some() || t.or.is_some() {
             w.add("3D rotation (rx/ry/or) is not supported; only the Z rotation is used");
@@ -278,8 +281,9 @@ pub enum Shape {
     },
     /// Rounded corners.
     Round(Value<f32>),
-    /// Merge paths with mode 1 merge, 2 add, 3 subtract, 4 intersect, 5 exclude.
-    Merge(u8),
+    /// Merge paths: the paths above are combined without a boolean operation (modes other
+    /// than plain merging were warned about at load).
+    Merge,
     /// Repeater.
     Repeater {
         /// Copies.
@@ -297,201 +301,180 @@ pub enum Shape {
     },
 }
 
-fn style_props(s: &schema::Style, ty: &str, w: &mut Warn) -> (Paint, Value<f32>) {
-    let opacity = prop(s.o.as_ref(), 100.0, "opacity", w);
-    let paint = if ty == "gf" || ty == "gs" {
-        let g = s.g.clone().unwrap_or_default();
-        let count = g.p.filter(|p| p.is_finite() && *p >= 0.0).unwrap_or(0.0).min(1000.0) as usize;
-        Paint::Gradient(Gradient {
-            start: prop(s.s.as_ref(), Vec2::ZERO, "gradient start", w),
-            end: prop(s.e.as_ref(), Vec2::ZERO, "gradient end", w),
-            radial: s.t == Some(2.0),
-            highlight_length: prop(s.h.as_ref(), 0.0, "highlight length", w),
-            highlight_angle: prop(s.a.as_ref(), 0.0, "highlight angle", w),
-            count,
-            stops: prop(g.k.as_ref(), Vec::new(), "gradient colors", w),
-        })
-    } else {
-        Paint::Color(prop(s.c.as_ref(), Color([0.0, 0.0, 0.0, 1.0]), "color", w))
-    };
-    (paint, opacity)
-}
-
-fn parse_shapes(items: &[Json], w: &mut Warn, depth: usize) -> Vec<Shape> {
-    let mut out = Vec::new();
+/// Resolves a shape list (hidden items skipped, unsupported ones warned about).
+fn shapes<'a>(entries: impl IntoIterator<Item = &'a schema::ShapeEntry>, w: &mut Warn, depth: usize) -> Vec<Shape> {
     if depth > 64 {
         w.add("shape groups nested more than 64 deep; deeper content ignored");
-        return out;
+        return Vec::new();
     }
-    for item in items {
-        let header: schema::ShapeHeader = serde_json::from_value(item.clone()).unwrap_or_default();
-        if header.hd {
-            continue;
-        }
-        let ty = header.ty.unwrap_or_default();
-        if let Some(shape) = parse_shape(&ty, item, w, depth) {
-            out.push(shape);
-        }
-    }
-    out
+    entries.into_iter().filter(|e| !e.hidden).filter_map(|e| shape(e, w, depth)).collect()
 }
 
-fn from<T: serde::de::DeserializeOwned + Default>(item: &Json, ty: &str, w: &mut Warn) -> T {
-    match serde_json::from_value(item.clone()) {
-        Ok(v) => v,
-        Err(e) => {
-            w.add(format!("malformed shape item '{ty}' ({e}); using defaults"));
-            T::default()
-        }
-    }
-}
-
-fn parse_shape(ty: &str, item: &Json, w: &mut Warn, depth: usize) -> Option<Shape> {
+/// Resolves one shape item; `None` for transforms (taken by their group) and for what is
+/// not supported.
+fn shape(entry: &schema::ShapeEntry, w: &mut Warn, depth: usize) -> Option<Shape> {
+    use schema::Shape as S;
     let reverse = |d: Option<f64>| d == Some(3.0);
-    Some(match ty {
-        "gr" => {
-            let g: schema::Group = from(item, ty, w);
-            let tr = g.it.iter().find(|i| i.get("ty").and_then(|t| t.as_str()) == Some("tr"));
-            let transform = match tr {
-                Some(tr) => {
-                    let t: schema::Transform = from(tr, "tr", w);
-                    Transform::from_schema(Some(&t), w)
-                }
-                None => Transform::default(),
-            };
-            let items: Vec<Json> =
-                g.it.into_iter().filter(|i| i.get("ty").and_then(|t| t.as_str()) != Some("tr")).collect();
-            Shape::Group { items: parse_shapes(&items, w, depth + 1), transform }
-        }
-        "sh" => {
-            let g: schema::Geometry = from(item, ty, w);
-            Shape::Path(prop(g.ks.as_ref(), Bez::default(), "path", w))
-        }
-        "rc" => {
-            let g: schema::Geometry = from(item, ty, w);
-            Shape::Rect {
-                position: prop(g.p.as_ref(), Vec2::ZERO, "rect position", w),
-                size: prop(g.s.as_ref(), Vec2::ZERO, "rect size", w),
-                roundness: prop(g.r.as_ref(), 0.0, "rect roundness", w),
-                reverse: reverse(g.d),
-            }
-        }
-        "el" => {
-            let g: schema::Geometry = from(item, ty, w);
-            Shape::Ellipse {
-                position: prop(g.p.as_ref(), Vec2::ZERO, "ellipse position", w),
-                size: prop(g.s.as_ref(), Vec2::ZERO, "ellipse size", w),
-                reverse: reverse(g.d),
-            }
-        }
-        "sr" => {
-            let g: schema::Geometry = from(item, ty, w);
-            Shape::Star {
-                star: g.sy != Some(2.0),
-                position: prop(g.p.as_ref(), Vec2::ZERO, "star position", w),
-                points: prop(g.pt.as_ref(), 5.0, "star points", w),
-                rotation: prop(g.r.as_ref(), 0.0, "star rotation", w),
-                outer_radius: prop(g.or.as_ref(), 0.0, "star outer radius", w),
-                outer_roundness: prop(g.os.as_ref(), 0.0, "star outer roundness", w),
-                inner_radius: prop(g.ir.as_ref(), 0.0, "star inner radius", w),
-                inner_roundness: prop(g.is.as_ref(), 0.0, "star inner roundness", w),
-                reverse: reverse(g.d),
-            }
-        }
-        "fl" | "gf" => {
-            let s: schema::Style = from(item, ty, w);
-            let (paint, opacity) = style_props(&s, ty, w);
-            Shape::Fill { paint, opacity, even_odd: s.r == Some(2.0) }
-        }
-        "st" | "gs" => {
-            let s: schema::Style = from(item, ty, w);
-            let (paint, opacity) = style_props(&s, ty, w);
-            let mut dashes = Vec::new();
-            let mut dash_offset = None;
-            for d in s.d.iter().flatten() {
-                let v = prop(d.v.as_ref(), 0.0, "dash", w);
-                match d.n.as_deref() {
-                    Some("o") => dash_offset = Some(v),
-                    Some("g") => dashes.push((true, v)),
-                    _ => dashes.push((false, v)),
-                }
-            }
-            let style = StrokeStyle {
-                width: prop(s.w.as_ref(), 1.0, "stroke width", w),
-                cap: match s.lc {
-                    Some(2.0) => tiny_skia::LineCap::Round,
-                    Some(3.0) => tiny_skia::LineCap::Square,
-                    _ => tiny_skia::LineCap::Butt,
-                },
-                join: match s.lj {
-                    Some(2.0) => tiny_skia::LineJoin::Round,
-                    Some(3.0) => tiny_skia::LineJoin::Bevel,
-                    _ => tiny_skia::LineJoin::Miter,
-                },
-                miter: s.ml.filter(|m| m.is_finite() && *m >= 1.0).unwrap_or(4.0) as f32,
-                dashes,
-                dash_offset,
-            };
-            Shape::Stroke { paint, opacity, style }
-        }
-        "tm" => {
-            let m: schema::Modifier = from(item, ty, w);
-            Shape::Trim {
-                start: prop(m.s.as_ref(), 0.0, "trim start", w),
-                end: prop(m.e.as_ref(), 100.0, "trim end", w),
-                offset: prop(m.o.as_ref(), 0.0, "trim offset", w),
-                sequential: m.m == Some(2.0),
-            }
-        }
-        "rd" => {
-            let m: schema::Modifier = from(item, ty, w);
-            Shape::Round(prop(m.r.as_ref(), 0.0, "corner radius", w))
-        }
-        "mm" => {
-            let m: schema::Modifier = from(item, ty, w);
-            let mode = m.m.filter(|x| (1.0..=5.0).contains(x)).unwrap_or(1.0) as u8;
-            if mode != 1 {
-                let name = ["", "merge", "add", "subtract", "intersect", "exclude"][mode as usize];
-                w.add(format!(
-                    "merge paths mode '{name}' is not supported; the paths are combined without a boolean operation"
-                ));
-            }
-            Shape::Merge(mode)
-        }
-        "rp" => {
-            let m: schema::Modifier = from(item, ty, w);
-            let tr = m.tr.clone().unwrap_or_default();
-            Shape::Repeater {
-                copies: prop(m.c.as_ref(), 1.0, "repeater copies", w),
-                offset: prop(m.o.as_ref(), 0.0, "repeater offset", w),
-                transform: Transform::from_schema(Some(&tr), w),
-                start_opacity: prop(tr.so.as_ref(), 100.0, "repeater start opacity", w),
-                end_opacity: prop(tr.eo.as_ref(), 100.0, "repeater end opacity", w),
-                above: m.m != Some(2.0),
-            }
-        }
-        "tr" => return None,
-        "pb" => {
-            w.add("puker/bloat modifier (pb) is not supported; ignored");
+    let unsupported = match &entry.shape {
+        S::Transform(_) => return None,
+        S::PuckerBloat => Some("puker/bloat modifier (pb)"),
+        S::Twist => Some("twist modifier (tw)"),
+        S::OffsetPath => Some("offset path modifier (op)"),
+        S::ZigZag => Some("zig-zag modifier (zz)"),
+        S::Unknown => {
+            w.add(format!("shape item type '{}' is not supported; ignored", entry.ty));
             return None;
         }
-        "tw" => {
-            w.add("twist modifier (tw) is not supported; ignored");
-            return None;
+        _ => None,
+    };
+    if let Some(what) = unsupported {
+        w.add(format!("{what} is not supported; ignored"));
+        return None;
+    }
+    if let Some(e) = &entry.error {
+        w.add(format!("malformed shape item '{}' ({e}); using defaults", entry.ty));
+    }
+    Some(match &entry.shape {
+        S::Group(g) => group(g, w, depth),
+        S::Path(p) => Shape::Path(prop(p.ks.as_ref(), Bez::default(), "path", w)),
+        S::Rect(r) => Shape::Rect {
+            position: prop(r.p.as_ref(), Vec2::ZERO, "rect position", w),
+            size: prop(r.s.as_ref(), Vec2::ZERO, "rect size", w),
+            roundness: prop(r.r.as_ref(), 0.0, "rect roundness", w),
+            reverse: reverse(r.d),
+        },
+        S::Ellipse(e) => Shape::Ellipse {
+            position: prop(e.p.as_ref(), Vec2::ZERO, "ellipse position", w),
+            size: prop(e.s.as_ref(), Vec2::ZERO, "ellipse size", w),
+            reverse: reverse(e.d),
+        },
+        S::Star(s) => star(s, w),
+        S::Fill(f) => {
+            let opacity = prop(f.o.as_ref(), 100.0, "opacity", w);
+            Shape::Fill { paint: color(f.c.as_ref(), w), opacity, even_odd: f.r == Some(2.0) }
         }
-        "op" => {
-            w.add("offset path modifier (op) is not supported; ignored");
-            return None;
+        S::GradientFill(f) => {
+            let opacity = prop(f.o.as_ref(), 100.0, "opacity", w);
+            Shape::Fill { paint: gradient(&f.gradient, w), opacity, even_odd: f.r == Some(2.0) }
         }
-        "zz" => {
-            w.add("zig-zag modifier (zz) is not supported; ignored");
-            return None;
+        S::Stroke(s) => {
+            let opacity = prop(s.o.as_ref(), 100.0, "opacity", w);
+            Shape::Stroke { paint: color(s.c.as_ref(), w), opacity, style: stroke_style(&s.line, w) }
         }
-        other => {
-            w.add(format!("shape item type '{other}' is not supported; ignored"));
-            return None;
+        S::GradientStroke(s) => {
+            let opacity = prop(s.o.as_ref(), 100.0, "opacity", w);
+            Shape::Stroke { paint: gradient(&s.gradient, w), opacity, style: stroke_style(&s.line, w) }
         }
+        S::Trim(t) => Shape::Trim {
+            start: prop(t.s.as_ref(), 0.0, "trim start", w),
+            end: prop(t.e.as_ref(), 100.0, "trim end", w),
+            offset: prop(t.o.as_ref(), 0.0, "trim offset", w),
+            sequential: t.m == Some(2.0),
+        },
+        S::RoundCorners(r) => Shape::Round(prop(r.r.as_ref(), 0.0, "corner radius", w)),
+        S::Merge(m) => merge(m, w),
+        S::Repeater(r) => repeater(r, w),
+        S::Transform(_) | S::PuckerBloat | S::Twist | S::OffsetPath | S::ZigZag | S::Unknown => return None,
     })
+}
+
+/// A group: its items and the transform of its (first) `tr` item.
+fn group(g: &schema::Group, w: &mut Warn, depth: usize) -> Shape {
+    let tr = g.it.iter().find(|e| e.ty == "tr");
+    let transform = match tr {
+        Some(schema::ShapeEntry { shape: schema::Shape::Transform(t), error, .. }) => {
+            if let Some(e) = error {
+                w.add(format!("malformed shape item 'tr' ({e}); using defaults"));
+            }
+            Transform::from_schema(Some(t), w)
+        }
+        _ => Transform::default(),
+    };
+    Shape::Group { items: shapes(g.it.iter().filter(|e| e.ty != "tr"), w, depth + 1), transform }
+}
+
+fn star(s: &schema::Star, w: &mut Warn) -> Shape {
+    Shape::Star {
+        star: s.sy != Some(2.0),
+        position: prop(s.p.as_ref(), Vec2::ZERO, "star position", w),
+        points: prop(s.pt.as_ref(), 5.0, "star points", w),
+        rotation: prop(s.r.as_ref(), 0.0, "star rotation", w),
+        outer_radius: prop(s.or.as_ref(), 0.0, "star outer radius", w),
+        outer_roundness: prop(s.os.as_ref(), 0.0, "star outer roundness", w),
+        inner_radius: prop(s.ir.as_ref(), 0.0, "star inner radius", w),
+        inner_roundness: prop(s.is.as_ref(), 0.0, "star inner roundness", w),
+        reverse: s.d == Some(3.0),
+    }
+}
+
+fn color(c: Option<&schema::Prop<Color>>, w: &mut Warn) -> Paint {
+    Paint::Color(prop(c, Color([0.0, 0.0, 0.0, 1.0]), "color", w))
+}
+
+fn gradient(g: &schema::Gradient, w: &mut Warn) -> Paint {
+    let colors = g.g.clone().unwrap_or_default();
+    let count = colors.p.filter(|p| p.is_finite() && *p >= 0.0).unwrap_or(0.0).min(1000.0) as usize;
+    Paint::Gradient(Gradient {
+        start: prop(g.s.as_ref(), Vec2::ZERO, "gradient start", w),
+        end: prop(g.e.as_ref(), Vec2::ZERO, "gradient end", w),
+        radial: g.t == Some(2.0),
+        highlight_length: prop(g.h.as_ref(), 0.0, "highlight length", w),
+        highlight_angle: prop(g.a.as_ref(), 0.0, "highlight angle", w),
+        count,
+        stops: prop(colors.k.as_ref(), Vec::new(), "gradient colors", w),
+    })
+}
+
+fn stroke_style(l: &schema::Line, w: &mut Warn) -> StrokeStyle {
+    let mut dashes = Vec::new();
+    let mut dash_offset = None;
+    for d in l.d.iter().flatten() {
+        let v = prop(d.v.as_ref(), 0.0, "dash", w);
+        match d.n.as_deref() {
+            Some("o") => dash_offset = Some(v),
+            Some("g") => dashes.push((true, v)),
+            _ => dashes.push((false, v)),
+        }
+    }
+    StrokeStyle {
+        width: prop(l.w.as_ref(), 1.0, "stroke width", w),
+        cap: match l.lc {
+            Some(2.0) => tiny_skia::LineCap::Round,
+            Some(3.0) => tiny_skia::LineCap::Square,
+            _ => tiny_skia::LineCap::Butt,
+        },
+        join: match l.lj {
+            Some(2.0) => tiny_skia::LineJoin::Round,
+            Some(3.0) => tiny_skia::LineJoin::Bevel,
+            _ => tiny_skia::LineJoin::Miter,
+        },
+        miter: l.ml.filter(|m| m.is_finite() && *m >= 1.0).unwrap_or(4.0) as f32,
+        dashes,
+        dash_offset,
+    }
+}
+
+fn merge(m: &schema::Merge, w: &mut Warn) -> Shape {
+    let mode = m.m.filter(|x| (1.0..=5.0).contains(x)).unwrap_or(1.0) as u8;
+    if mode != 1 {
+        let name = ["", "merge", "add", "subtract", "intersect", "exclude"][mode as usize];
+        w.add(format!(
+            "merge paths mode '{name}' is not supported; the paths are combined without a boolean operation"
+        ));
+    }
+    Shape::Merge
+}
+
+fn repeater(r: &schema::Repeater, w: &mut Warn) -> Shape {
+    let tr = r.tr.clone().unwrap_or_default();
+    Shape::Repeater {
+        copies: prop(r.c.as_ref(), 1.0, "repeater copies", w),
+        offset: prop(r.o.as_ref(), 0.0, "repeater offset", w),
+        transform: Transform::from_schema(Some(&tr), w),
+        start_opacity: prop(tr.so.as_ref(), 100.0, "repeater start opacity", w),
+        end_opacity: prop(tr.eo.as_ref(), 100.0, "repeater end opacity", w),
+        above: r.m != Some(2.0),
+    }
 }
 
 /// Mask combination mode.
@@ -526,6 +509,30 @@ pub struct Mask {
     pub opacity: Value<f32>,
     /// Expansion in pixels.
     pub expansion: Value<f32>,
+}
+
+/// Resolves a mask of `masksProperties`.
+fn mask(m: &schema::Mask, w: &mut Warn) -> Mask {
+    let mode = match m.mode.as_deref() {
+        Some("a") | None => MaskMode::Add,
+        Some("s") => MaskMode::Subtract,
+        Some("i") => MaskMode::Intersect,
+        Some("l") => MaskMode::Lighten,
+        Some("d") => MaskMode::Darken,
+        Some("f") => MaskMode::Difference,
+        Some("n") => MaskMode::None,
+        Some(other) => {
+            w.add(format!("mask mode '{other}' is not supported; treated as add"));
+            MaskMode::Add
+        }
+    };
+    Mask {
+        mode,
+        inverted: m.inv,
+        path: prop(m.pt.as_ref(), Bez::default(), "mask path", w),
+        opacity: prop(m.o.as_ref(), 100.0, "mask opacity", w),
+        expansion: prop(m.x.as_ref(), 0.0, "mask expansion", w),
+    }
 }
 
 /// Track matte mode.
@@ -631,23 +638,61 @@ pub struct Composition {
     pub layers: Vec<Layer>,
 }
 
-/// The whole animation.
+/// A parsed Lottie animation, resolved: compositions of layers whose transforms and shapes
+/// evaluate at any frame. Made by [`parse`](super::parse), drawn by [`render`](super::render()).
 #[derive(Clone, Debug)]
 pub struct Model {
     /// Canvas width.
-    pub width: f32,
+    pub(crate) width: f32,
     /// Canvas height.
-    pub height: f32,
+    pub(crate) height: f32,
     /// Frame rate.
-    pub fps: f32,
+    pub(crate) fps: f32,
     /// First frame.
-    pub ip: f32,
+    pub(crate) ip: f32,
     /// Frame after the last.
-    pub op: f32,
+    pub(crate) op: f32,
     /// `comps[0]` is the root; the rest are precomp assets.
-    pub comps: Vec<Composition>,
+    pub(crate) comps: Vec<Composition>,
     /// File-level warnings.
-    pub warnings: Vec<String>,
+    pub(crate) warnings: Vec<String>,
+}
+
+impl Model {
+    /// Canvas width in pixels (`w`).
+    pub fn width(&self) -> f32 {
+        self.width
+    }
+
+    /// Canvas height in pixels (`h`).
+    pub fn height(&self) -> f32 {
+        self.height
+    }
+
+    /// Frames per second (`fr`).
+    pub fn fps(&self) -> f32 {
+        self.fps
+    }
+
+    /// The first frame (`ip`): frame 0 of the animation is this composition time.
+    pub fn first_frame(&self) -> f32 {
+        self.ip
+    }
+
+    /// Number of frames, `op − ip` rounded up.
+    pub fn frame_count(&self) -> usize {
+        (self.op - self.ip).ceil().max(0.0) as usize
+    }
+
+    /// Number of top-level layers; a [`Target`](super::Target)'s `layer` is below it.
+    pub fn layer_count(&self) -> usize {
+        self.comps[0].layers.len()
+    }
+
+    /// Problems of the file as a whole (unsupported features), each a sentence.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
 }
 
 fn solid_color(sc: Option<&str>) -> Option<[f32; 4]> {
@@ -762,62 +807,20 @@ impl Builder<'_> {
         Some(comp_index)
     }
 
-    fn layer(&mut self, l: &schema::Layer, depth: usize) -> Layer {
-        let ty = l.ty.filter(|t| t.is_finite()).map(|t| t as i64).unwrap_or(-1);
-        let name = l.nm.clone().unwrap_or_else(|| format!("layer {}", l.ind.map(|i| i as i64).unwrap_or(0)));
-        let mut warnings = Vec::new();
-        let mut w = Warn { layer: &name, out: &mut warnings };
-        if l.ddd.is_some_and(|d| d != 0.0) {
-            w.add("3D layers are not supported; drawn flat");
-        }
-        if l.ao.is_some_and(|a| a != 0.0) {
-            w.add("auto-orient is not supported; ignored");
-        }
-        if l.bm.is_some_and(|b| b != 0.0) {
-            w.add("blend modes are not supported; drawn as normal");
-        }
-        if l.ef.as_ref().is_some_and(|e| e.as_array().is_some_and(|a| !a.is_empty())) {
-            w.add("effects are not supported; ignored");
-        }
-        if l.sy.as_ref().is_some_and(|e| e.as_array().is_some_and(|a| !a.is_empty())) {
-            w.add("layer styles are not supported; ignored");
-        }
-        let transform = Transform::from_schema(l.ks.as_ref(), &mut w);
-        let mut masks = Vec::new();
-        for m in l.masksProperties.iter().flatten() {
-            let mode = match m.mode.as_deref() {
-                Some("a") | None => MaskMode::Add,
-                Some("s") => MaskMode::Subtract,
-                Some("i") => MaskMode::Intersect,
-                Some("l") => MaskMode::Lighten,
-                Some("d") => MaskMode::Darken,
-                Some("f") => MaskMode::Difference,
-                Some("n") => MaskMode::None,
-                Some(other) => {
-                    w.add(format!("mask mode '{other}' is not supported; treated as add"));
-                    MaskMode::Add
-                }
-            };
-            masks.push(Mask {
-                mode,
-                inverted: m.inv,
-                path: prop(m.pt.as_ref(), Bez::default(), "mask path", &mut w),
-                opacity: prop(m.o.as_ref(), 100.0, "mask opacity", &mut w),
-                expansion: prop(m.x.as_ref(), 0.0, "mask expansion", &mut w),
-            });
-        }
+    /// What a layer of type `ty` draws, and its time remap (precomps).
+    fn content(&mut self, l: &schema::Layer, ty: i64, depth: usize, w: &mut Warn) -> (Content, Option<Value<f32>>) {
         let mut time_remap = None;
         let content = match ty {
             0 => {
                 let comp = match l.refId.as_deref() {
-                    Some(id) => self.asset(id, depth, &mut w),
+                    Some(id) => self.asset(id, depth, w),
                     None => {
                         w.add("precomp layer without refId; draws nothing");
                         None
                     }
                 };
                 if l.tm.is_some() {
-                    time_remap = Some(prop(l.tm.as_ref(), 0.0, "time remap", &mut w));
+                    time_remap = Some(prop(l.tm.as_ref(), 0.0, "time remap", w));
                 }
                 match comp {
                     Some(comp) => Content::Precomp {
@@ -840,7 +843,7 @@ impl Builder<'_> {
                 Content::Nothing
             }
             3 => Content::Nothing,
-            4 => Content::Shapes(parse_shapes(l.shapes.as_deref().unwrap_or(&[]), &mut w, 0)),
+            4 => Content::Shapes(shapes(l.shapes.iter().flatten(), w, 0)),
             5 => {
                 w.add("text layers are not supported; nothing drawn");
                 Content::Nothing
@@ -850,6 +853,32 @@ impl Builder<'_> {
                 Content::Nothing
             }
         };
+        (content, time_remap)
+    }
+
+    fn layer(&mut self, l: &schema::Layer, depth: usize) -> Layer {
+        let ty = l.ty.filter(|t| t.is_finite()).map(|t| t as i64).unwrap_or(-1);
+        let name = l.nm.clone().unwrap_or_else(|| format!("layer {}", l.ind.map(|i| i as i64).unwrap_or(0)));
+        let mut warnings = Vec::new();
+        let mut w = Warn { layer: &name, out: &mut warnings };
+        if l.ddd.is_some_and(|d| d != 0.0) {
+            w.add("3D layers are not supported; drawn flat");
+        }
+        if l.ao.is_some_and(|a| a != 0.0) {
+            w.add("auto-orient is not supported; ignored");
+        }
+        if l.bm.is_some_and(|b| b != 0.0) {
+            w.add("blend modes are not supported; drawn as normal");
+        }
+        if l.ef {
+            w.add("effects are not supported; ignored");
+        }
+        if l.sy {
+            w.add("layer styles are not supported; ignored");
+        }
+        let transform = Transform::from_schema(l.ks.as_ref(), &mut w);
+        let masks = l.masksProperties.iter().flatten().map(|m| mask(m, &mut w)).collect();
+        let (content, time_remap) = self.content(l, ty, depth, &mut w);
         let finite = |v: Option<f64>, d: f32| v.map(|x| x as f32).filter(|x| x.is_finite()).unwrap_or(d);
         let sr = finite(l.sr, 1.0);
         Layer {
@@ -889,7 +918,7 @@ pub fn build(root: &schema::Root, width: f32, height: f32, fps: f32, ip: f32, op
         warnings: Vec::new(),
     };
     let rootc = b.comp(root.layers.as_deref().unwrap_or(&[]), 0);
-    if root.chars.as_ref().is_some_and(|c| c.as_array().is_some_and(|a| !a.is_empty())) {
+    if root.chars {
         b.warnings.push("the file embeds glyphs (chars) for text; text is not supported".into());
     }
     if root.ddd.is_some_and(|d| d != 0.0) {
@@ -898,4 +927,25 @@ pub fn build(root: &schema::Root, width: f32, height: f32, fps: f32, ip: f32, op
     let mut comps: Vec<Composition> = b.comps.into_iter().map(Option::unwrap_or_default).collect();
     comps[0] = rootc;
     Model { width, height, fps, ip, op, comps, warnings: b.warnings }
+}
+
+#[cfg(test)]
+mod tests {
+    use serde_json::json;
+    use std::path::Path;
+
+    #[test]
+    fn keyframes_of_both_layouts_evaluate_through_the_model() {
+        // Position: linear 0 → 30 over frames 0..6 (4.x `e` style), held, then 5.x `s` style.
+        let doc = json!({"v": "5.7.1", "fr": 10, "ip": 0, "op": 10, "w": 40, "h": 40, "layers": [
+            {"ty": 4, "nm": "moving", "ind": 1, "ip": 0, "op": 10, "st": 0, "shapes": [],
+             "ks": {"p": {"k": [
+                {"t": 0, "s": [0, 0], "e": [30, 0], "i": {"x": 1, "y": 1}, "o": {"x": 0, "y": 0}},
+                {"t": 6, "s": [30, 0], "h": 1}, {"t": 8, "s": [0, 20]}]}}}]});
+        let m = super::super::parse(Path::new("t.json"), &doc.to_string()).unwrap();
+        let tr = &m.comps[0].layers[0].transform;
+        assert!((tr.position.evaluate(3.0).x - 15.0).abs() < 1e-3);
+        assert_eq!(tr.position.evaluate(7.0), glam::Vec2::new(30.0, 0.0));
+        assert_eq!(tr.position.evaluate(9.0), glam::Vec2::new(0.0, 20.0));
+    }
 }

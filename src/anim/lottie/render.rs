@@ -4,7 +4,9 @@
 //! composition time, at a given scale, in one [`Pass`] (fills, strokes, or both).
 
 use super::geom::{self, Bez, Star};
-use super::model::{Composition, Content, Gradient, Layer, MaskMode, MatteMode, Model, Paint, Shape, StrokeStyle};
+use super::model::{
+    Composition, Content, Gradient, Layer, MAX_DEPTH, MaskMode, MatteMode, Model, Paint, Shape, StrokeStyle,
+};
 use super::value::Color;
 use glam::{Affine2, Vec2};
 use tiny_skia::{FillRule, Mask, MaskType, Pixmap, PixmapPaint};
@@ -76,11 +78,41 @@ fn drawable(path: &tiny_skia::Path, ts: tiny_skia::Transform, pad: f32) -> bool 
 /// nested repeaters, multiply; past this budget the rest is skipped (with a warning).
 pub const MAX_DRAWS: usize = 10_000;
 
+/// What one rendering shares: the model, the canvas size and the draw budget.
 struct Ctx<'a> {
     model: &'a Model,
     width: u32,
     height: u32,
     draws: std::cell::Cell<usize>,
+}
+
+/// How a layer or a list of shape items is drawn: the state passed down from the enclosing
+/// layers, precomps, groups and repeater copies.
+#[derive(Clone, Copy)]
+struct Draw<'a> {
+    /// Time: of the containing composition for a layer, the layer's local time for its shapes.
+    t: f32,
+    /// The transform to the canvas.
+    m: Affine2,
+    /// Opacity in `0..=1` accumulated from the enclosing layers, groups and copies.
+    alpha: f32,
+    /// Coverage of the enclosing precomps' bounds.
+    clip: Option<&'a Mask>,
+    /// Fills, strokes or both.
+    pass: Pass,
+    /// Precomp nesting depth.
+    depth: usize,
+}
+
+/// Why a layer is drawn.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Role {
+    /// It is the region (drawn even when hidden); for a split precomp, only this child.
+    Region(Option<usize>),
+    /// It is the track matte of another layer (drawn even when hidden).
+    Matte,
+    /// It is inside a precomp being drawn.
+    Nested,
 }
 
 impl Ctx<'_> {
@@ -103,10 +135,9 @@ pub fn render(model: &Model, target: Target, time: f32, width: u32, height: u32,
         return Pixmap::new(1, 1).unwrap_or_else(|| unreachable!());
     };
     let ctx = Ctx { model, width: pm.width(), height: pm.height(), draws: std::cell::Cell::new(0) };
-    let base = Affine2::from_scale(Vec2::splat(scale));
-    let root = &model.comps[0];
-    if target.layer < root.layers.len() {
-        ctx.draw_layer(0, target.layer, time, base, 1.0, None, target.child, pass, &mut pm, 0, true);
+    let d = Draw { t: time, m: Affine2::from_scale(Vec2::splat(scale)), alpha: 1.0, clip: None, pass, depth: 0 };
+    if target.layer < model.comps[0].layers.len() {
+        ctx.draw_layer(0, target.layer, Role::Region(target.child), d, &mut pm);
     }
     pm
 }
@@ -137,42 +168,32 @@ impl Ctx<'_> {
         Pixmap::new(self.width, self.height)
     }
 
-    /// Draws layer `li` of composition `c` at composition time `t`.
-    #[allow(clippy::too_many_arguments)]
-    fn draw_layer(
-        &self,
-        c: usize,
-        li: usize,
-        t: f32,
-        outer: Affine2,
-        alpha: f32,
-        clip: Option<&Mask>,
-        only: Option<usize>,
-        pass: Pass,
-        target: &mut Pixmap,
-        depth: usize,
-        as_region: bool,
-    ) {
+    /// Draws layer `li` of composition `c`: its content, then its masks and track matte.
+    fn draw_layer(&self, c: usize, li: usize, role: Role, d: Draw, target: &mut Pixmap) {
         let comp = self.comp(c);
         let layer = &comp.layers[li];
-        if (layer.hidden && !as_region) || !layer.active(t) || depth > super::model::MAX_DEPTH || !self.spend() {
+        if (layer.hidden && role == Role::Nested) || !layer.active(d.t) || d.depth > MAX_DEPTH || !self.spend() {
             return;
         }
-        let lt = layer.local_time(t);
-        let m = outer * self.world(comp, li, t);
-        let opacity = alpha * layer.transform.opacity(lt);
-        if opacity <= 0.0 {
+        let lt = layer.local_time(d.t);
+        let content =
+            Draw { t: lt, m: d.m * self.world(comp, li, d.t), alpha: d.alpha * layer.transform.opacity(lt), ..d };
+        if content.alpha <= 0.0 {
             return;
         }
+        let only = match role {
+            Role::Region(child) => child,
+            Role::Matte | Role::Nested => None,
+        };
         let has_masks = layer.masks.iter().any(|m| m.mode != MaskMode::None);
         if !has_masks && layer.matte.is_none() {
-            self.draw_content(c, layer, lt, m, opacity, clip, only, pass, target, depth);
+            self.draw_content(layer, only, content, target);
             return;
         }
         let Some(mut pm) = self.new_pixmap() else { return };
-        self.draw_content(c, layer, lt, m, opacity, clip, only, pass, &mut pm, depth);
+        self.draw_content(layer, only, content, &mut pm);
         if has_masks {
-            match self.layer_mask(layer, lt, m) {
+            match self.layer_mask(layer, lt, content.m) {
                 Some(mask) => pm.apply_mask(&mask),
                 None => return,
             }
@@ -180,7 +201,8 @@ impl Ctx<'_> {
         if let Some((mode, src)) = layer.matte {
             let Some(mut mp) = self.new_pixmap() else { return };
             // The matte source is drawn whole (fills and strokes), with the same outer transform.
-            self.draw_layer(c, src, t, outer, 1.0, clip, None, Pass::All, &mut mp, depth + 1, true);
+            let matte = Draw { alpha: 1.0, pass: Pass::All, depth: d.depth + 1, ..d };
+            self.draw_layer(c, src, Role::Matte, matte, &mut mp);
             let mut mask = Mask::from_pixmap(
                 mp.as_ref(),
                 match mode {
@@ -196,57 +218,45 @@ impl Ctx<'_> {
         target.draw_pixmap(0, 0, pm.as_ref(), &PixmapPaint::default(), tiny_skia::Transform::identity(), None);
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn draw_content(
-        &self,
-        c: usize,
-        layer: &Layer,
-        lt: f32,
-        m: Affine2,
-        opacity: f32,
-        clip: Option<&Mask>,
-        only: Option<usize>,
-        pass: Pass,
-        target: &mut Pixmap,
-        depth: usize,
-    ) {
-        let _ = c;
+    /// Draws what a layer contains (`only` one child of a precomp, for split precomps).
+    fn draw_content(&self, layer: &Layer, only: Option<usize>, d: Draw, target: &mut Pixmap) {
         match &layer.content {
-            Content::Shapes(items) => self.draw_items(items, lt, m, opacity, pass, clip, target),
+            Content::Shapes(items) => self.draw_items(items, d, target),
             Content::Solid { color, width, height } => {
-                if !pass.fills() {
+                if !d.pass.fills() {
                     return;
                 }
                 let Some(rect) = tiny_skia::Rect::from_xywh(0.0, 0.0, *width, *height) else { return };
-                let Some(ts) = to_ts(&m) else { return };
+                let Some(ts) = to_ts(&d.m) else { return };
                 let mut paint = tiny_skia::Paint { anti_alias: true, ..Default::default() };
-                paint.set_color(rgba(color, opacity));
+                paint.set_color(rgba(color, d.alpha));
                 let path = tiny_skia::PathBuilder::from_rect(rect);
                 if !drawable(&path, ts, 0.0) {
                     return;
                 }
-                target.fill_path(&path, &paint, FillRule::Winding, ts, clip);
+                target.fill_path(&path, &paint, FillRule::Winding, ts, d.clip);
             }
             Content::Precomp { comp, width, height } => {
                 let inner_t = match &layer.time_remap {
-                    Some(tm) => tm.evaluate(lt) * self.model.fps,
-                    None => layer.inner_time(lt),
+                    Some(tm) => tm.evaluate(d.t) * self.model.fps,
+                    None => layer.inner_time(d.t),
                 };
                 if !inner_t.is_finite() {
                     return;
                 }
-                let own_clip = self.precomp_clip(m, *width, *height, clip);
+                let own_clip = self.precomp_clip(d.m, *width, *height, d.clip);
                 let clip = match &own_clip {
                     Some(Some(mask)) => Some(mask),
                     Some(None) => return, // clipped away entirely
-                    None => clip,
+                    None => d.clip,
                 };
                 let inner = self.comp(*comp);
+                let d = Draw { t: inner_t, clip, depth: d.depth + 1, ..d };
                 for ci in (0..inner.layers.len()).rev() {
                     if inner.layers[ci].is_matte_source || only.is_some_and(|o| o != ci) {
                         continue;
                     }
-                    self.draw_layer(*comp, ci, inner_t, m, opacity, clip, None, pass, target, depth + 1, false);
+                    self.draw_layer(*comp, ci, Role::Nested, d, target);
                 }
             }
             Content::Nothing => {}
@@ -342,48 +352,29 @@ impl Ctx<'_> {
         Mask::from_vec(data, tiny_skia::IntSize::from_wh(self.width, self.height)?)
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn draw_items(
-        &self,
-        items: &[Shape],
-        t: f32,
-        m: Affine2,
-        alpha: f32,
-        pass: Pass,
-        clip: Option<&Mask>,
-        target: &mut Pixmap,
-    ) {
-        let mut tree = evaluate(items, t, 0);
+    fn draw_items(&self, items: &[Shape], d: Draw, target: &mut Pixmap) {
+        let mut tree = evaluate(items, d.t, 0);
         apply_modifiers(&mut tree);
-        self.draw_tree(&tree, t, m, alpha, pass, clip, target);
+        self.draw_tree(&tree, d, target);
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn draw_tree(
-        &self,
-        items: &[Item],
-        t: f32,
-        m: Affine2,
-        alpha: f32,
-        pass: Pass,
-        clip: Option<&Mask>,
-        target: &mut Pixmap,
-    ) {
+    /// Draws evaluated items, bottom-most first: each style paints the paths above it.
+    fn draw_tree(&self, items: &[Item], d: Draw, target: &mut Pixmap) {
         for k in (0..items.len()).rev() {
             match &items[k] {
                 Item::Group { items: inner, matrix, opacity } if *opacity > 0.0 => {
-                    self.draw_tree(inner, t, m * *matrix, alpha * opacity, pass, clip, target);
+                    self.draw_tree(inner, Draw { m: d.m * *matrix, alpha: d.alpha * opacity, ..d }, target);
                 }
-                Item::Other(Shape::Fill { paint, opacity, even_odd }) if pass.fills() => {
+                Item::Other(Shape::Fill { paint, opacity, even_odd }) if d.pass.fills() => {
                     let paths = collect(&items[..k]);
-                    let o = alpha * (opacity.evaluate(t) / 100.0).clamp(0.0, 1.0);
+                    let alpha = d.alpha * (opacity.evaluate(d.t) / 100.0).clamp(0.0, 1.0);
                     let rule = if *even_odd { FillRule::EvenOdd } else { FillRule::Winding };
-                    self.fill(&paths, paint, o, rule, t, m, clip, target);
+                    self.fill(&paths, paint, rule, Draw { alpha, ..d }, target);
                 }
-                Item::Other(Shape::Stroke { paint, opacity, style }) if pass.strokes() => {
+                Item::Other(Shape::Stroke { paint, opacity, style }) if d.pass.strokes() => {
                     let paths = collect(&items[..k]);
-                    let o = alpha * (opacity.evaluate(t) / 100.0).clamp(0.0, 1.0);
-                    self.stroke(&paths, paint, o, style, t, m, clip, target);
+                    let alpha = d.alpha * (opacity.evaluate(d.t) / 100.0).clamp(0.0, 1.0);
+                    self.stroke(&paths, paint, style, Draw { alpha, ..d }, target);
                 }
                 Item::Repeater { copies, start_opacity, end_opacity, above } => {
                     let n = copies.len();
@@ -395,7 +386,7 @@ impl Ctx<'_> {
                         // Copy c fades by (c + 1) / n, as ThorVG draws it.
                         let f = (c + 1) as f32 / n as f32;
                         let o = (start_opacity + (end_opacity - start_opacity) * f).clamp(0.0, 1.0);
-                        self.draw_tree(&items[..k], t, m * copies[c], alpha * o, pass, clip, target);
+                        self.draw_tree(&items[..k], Draw { m: d.m * copies[c], alpha: d.alpha * o, ..d }, target);
                     }
                     return;
                 }
@@ -404,46 +395,27 @@ impl Ctx<'_> {
         }
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn fill(
-        &self,
-        paths: &[Bez],
-        paint: &Paint,
-        opacity: f32,
-        rule: FillRule,
-        t: f32,
-        m: Affine2,
-        clip: Option<&Mask>,
-        target: &mut Pixmap,
-    ) {
-        if opacity <= 0.0 || !opacity.is_finite() {
+    /// Fills `paths` with `paint` at opacity `d.alpha`.
+    fn fill(&self, paths: &[Bez], paint: &Paint, rule: FillRule, d: Draw, target: &mut Pixmap) {
+        if d.alpha <= 0.0 || !d.alpha.is_finite() {
             return;
         }
-        let (Some(path), Some(ts)) = (geom::to_skia_path(paths), to_ts(&m)) else { return };
+        let (Some(path), Some(ts)) = (geom::to_skia_path(paths), to_ts(&d.m)) else { return };
         if !drawable(&path, ts, 0.0) {
             return;
         }
-        let Some(p) = make_paint(paint, opacity, t) else { return };
-        target.fill_path(&path, &p, rule, ts, clip);
+        let Some(p) = make_paint(paint, d.alpha, d.t) else { return };
+        target.fill_path(&path, &p, rule, ts, d.clip);
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn stroke(
-        &self,
-        paths: &[Bez],
-        paint: &Paint,
-        opacity: f32,
-        style: &StrokeStyle,
-        t: f32,
-        m: Affine2,
-        clip: Option<&Mask>,
-        target: &mut Pixmap,
-    ) {
+    /// Strokes `paths` with `paint` at opacity `d.alpha`.
+    fn stroke(&self, paths: &[Bez], paint: &Paint, style: &StrokeStyle, d: Draw, target: &mut Pixmap) {
+        let (t, opacity) = (d.t, d.alpha);
         let width = style.width.evaluate(t);
         if opacity <= 0.0 || !opacity.is_finite() || !width.is_finite() || width <= 0.0 {
             return;
         }
-        let Some(ts) = to_ts(&m) else { return };
+        let Some(ts) = to_ts(&d.m) else { return };
         let Some(p) = make_paint(paint, opacity, t) else { return };
         let Some(path) = geom::to_skia_path(paths) else { return };
         if !drawable(&path, ts, width * style.miter.max(1.0)) {
@@ -469,7 +441,7 @@ impl Ctx<'_> {
                 stroke.dash = tiny_skia::StrokeDash::new(arr, if off.is_finite() { off } else { 0.0 });
             }
         }
-        target.stroke_path(&path, &p, &stroke, ts, clip);
+        target.stroke_path(&path, &p, &stroke, ts, d.clip);
     }
 }
 

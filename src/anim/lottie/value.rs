@@ -6,60 +6,22 @@
 //! keyframes that keep their end value in `e` (the last keyframe then has only `t`).
 
 use super::geom::Bez;
+use super::schema;
 use glam::Vec2;
-use serde_json::Value as Json;
 
-/// Values that can be read from JSON and interpolated.
+/// Values that can be interpolated between keyframes.
 pub trait Animatable: Clone {
-    /// Reads a value from the JSON of `k` or of a keyframe's `s`/`e`.
-    fn from_json(v: &Json) -> Option<Self>;
     /// Interpolates; `t(d)` gives the eased progress of dimension `d`.
     fn lerp(a: &Self, b: &Self, t: &dyn Fn(usize) -> f32) -> Self;
 }
 
-fn number(v: &Json) -> Option<f32> {
-    match v {
-        Json::Number(n) => n.as_f64().map(|x| x as f32),
-        Json::Array(a) => a.first().and_then(number),
-        _ => None,
-    }
-}
-
-fn numbers(v: &Json) -> Option<Vec<f32>> {
-    match v {
-        Json::Number(n) => n.as_f64().map(|x| vec![x as f32]),
-        Json::Array(a) => {
-            let mut out = Vec::with_capacity(a.len());
-            for x in a {
-                match x {
-                    Json::Number(n) => out.push(n.as_f64()? as f32),
-                    _ => return None,
-                }
-            }
-            Some(out)
-        }
-        _ => None,
-    }
-}
-
 impl Animatable for f32 {
-    fn from_json(v: &Json) -> Option<Self> {
-        number(v)
-    }
     fn lerp(a: &Self, b: &Self, t: &dyn Fn(usize) -> f32) -> Self {
         a + (b - a) * t(0)
     }
 }
 
 impl Animatable for Vec2 {
-    fn from_json(v: &Json) -> Option<Self> {
-        let n = numbers(v)?;
-        match n.len() {
-            0 => None,
-            1 => Some(Vec2::splat(n[0])),
-            _ => Some(Vec2::new(n[0], n[1])),
-        }
-    }
     fn lerp(a: &Self, b: &Self, t: &dyn Fn(usize) -> f32) -> Self {
         Vec2::new(a.x + (b.x - a.x) * t(0), a.y + (b.y - a.y) * t(1))
     }
@@ -70,23 +32,6 @@ impl Animatable for Vec2 {
 pub struct Color(pub [f32; 4]);
 
 impl Animatable for Color {
-    fn from_json(v: &Json) -> Option<Self> {
-        let n = numbers(v)?;
-        if n.len() < 3 {
-            return None;
-        }
-        let mut c = [n[0], n[1], n[2], n.get(3).copied().unwrap_or(1.0)];
-        // Some old exporters write 0..255.
-        if c[..3].iter().any(|&x| x > 1.0) {
-            for x in &mut c[..3] {
-                *x /= 255.0;
-            }
-        }
-        if c[3] > 1.0 {
-            c[3] /= 255.0;
-        }
-        Some(Color(c.map(|x| if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 })))
-    }
     fn lerp(a: &Self, b: &Self, t: &dyn Fn(usize) -> f32) -> Self {
         let t = t(0);
         Color(std::array::from_fn(|i| a.0[i] + (b.0[i] - a.0[i]) * t))
@@ -95,9 +40,6 @@ impl Animatable for Color {
 
 /// A flat list of numbers (gradient stops).
 impl Animatable for Vec<f32> {
-    fn from_json(v: &Json) -> Option<Self> {
-        numbers(v)
-    }
     fn lerp(a: &Self, b: &Self, t: &dyn Fn(usize) -> f32) -> Self {
         let t = t(0);
         a.iter().enumerate().map(|(i, &x)| b.get(i).map_or(x, |&y| x + (y - x) * t)).collect()
@@ -105,13 +47,6 @@ impl Animatable for Vec<f32> {
 }
 
 impl Animatable for Bez {
-    fn from_json(v: &Json) -> Option<Self> {
-        match v {
-            Json::Array(a) => a.first().and_then(Bez::from_json_object),
-            Json::Object(_) => Bez::from_json_object(v),
-            _ => None,
-        }
-    }
     fn lerp(a: &Self, b: &Self, t: &dyn Fn(usize) -> f32) -> Self {
         a.lerp(b, t(0))
     }
@@ -128,9 +63,6 @@ pub struct Ease {
 }
 
 impl Ease {
-    /// Linear easing.
-    pub const LINEAR: Ease = Ease { out: Vec2::ZERO, inn: Vec2::ONE };
-
     /// The eased progress for linear progress `x` in `0..=1`.
     pub fn apply(&self, x: f32) -> f32 {
         let (p1, p2) = (self.out, self.inn);
@@ -202,22 +134,12 @@ pub enum Value<T> {
 }
 
 impl<T: Animatable> Value<T> {
-    /// True when the value changes over time.
-    pub fn is_animated(&self) -> bool {
-        matches!(self, Value::Animated(k) if k.len() > 1)
-    }
-
     /// The value at `frame` (layer-local, fractional).
     pub fn evaluate(&self, frame: f32) -> T {
         match self {
             Value::Fixed(v) => v.clone(),
             Value::Animated(keys) => evaluate_keys(keys, frame),
         }
-    }
-
-    /// A fixed value.
-    pub fn fixed(v: T) -> Self {
-        Value::Fixed(v)
     }
 }
 
@@ -300,92 +222,79 @@ fn point_at_length(p0: Vec2, p1: Vec2, p2: Vec2, p3: Vec2, t: f32) -> Vec2 {
     cubic(p0, p1, p2, p3, s)
 }
 
-fn handle_component(h: Option<&Json>, key: &str) -> Vec<f32> {
-    h.and_then(|h| h.get(key)).and_then(numbers).unwrap_or_default()
-}
-
-fn eases(o: Option<&Json>, i: Option<&Json>) -> Vec<Ease> {
-    let (ox, oy, ix, iy) =
-        (handle_component(o, "x"), handle_component(o, "y"), handle_component(i, "x"), handle_component(i, "y"));
-    let n = ox.len().max(oy.len()).max(ix.len()).max(iy.len()).max(1);
+fn eases(o: &schema::Handle, i: &schema::Handle) -> Vec<Ease> {
+    let n = o.x.len().max(o.y.len()).max(i.x.len()).max(i.y.len()).max(1);
     let at =
         |v: &[f32], d: usize, default: f32| v.get(d).or(v.last()).copied().filter(|x| x.is_finite()).unwrap_or(default);
     (0..n)
         .map(|d| Ease {
-            out: Vec2::new(at(&ox, d, 0.0), at(&oy, d, 0.0)),
-            inn: Vec2::new(at(&ix, d, 1.0), at(&iy, d, 1.0)),
+            out: Vec2::new(at(&o.x, d, 0.0), at(&o.y, d, 0.0)),
+            inn: Vec2::new(at(&i.x, d, 1.0), at(&i.y, d, 1.0)),
         })
         .collect()
 }
 
-/// Why a property could not be read.
-#[derive(Debug, Clone, PartialEq)]
-pub enum PropError {
-    /// The property uses an expression (`x`); its static value is used.
-    Expression,
-    /// The value has the wrong shape; the default is used.
-    Malformed,
+/// A property value that cannot be used (wrong shape, keyframes without a time or out of
+/// order); the caller falls back to a default and warns.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Malformed;
+
+impl<T: Animatable> Value<T> {
+    /// Resolves a property's `k`: keyframes of both layouts become segments from each
+    /// keyframe to the next (4.x keep the end value in `e`, 5.x in the next keyframe's `s`).
+    pub fn from_schema(k: &schema::Value<T>) -> Result<Value<T>, Malformed> {
+        match k {
+            schema::Value::Static(v) => Ok(Value::Fixed(v.clone())),
+            schema::Value::Animated(keys) => keyframes(keys).map(Value::Animated),
+            schema::Value::Malformed => Err(Malformed),
+        }
+    }
 }
 
-/// Reads an animatable property (`{"a":…, "k":…}`). On failure returns the reason; the caller
-/// falls back to a default and warns.
-pub fn parse_prop<T: Animatable>(k: &Json) -> Result<Value<T>, PropError> {
-    let keyframes = match k {
-        Json::Array(a) if a.first().is_some_and(|f| f.is_object() && f.get("t").is_some()) => a,
-        _ => return T::from_json(k).map(Value::Fixed).ok_or(PropError::Malformed),
-    };
-    let mut out: Vec<Keyframe<T>> = Vec::with_capacity(keyframes.len());
-    for (n, kf) in keyframes.iter().enumerate() {
-        let Some(time) = kf.get("t").and_then(number).filter(|t| t.is_finite()) else {
-            return Err(PropError::Malformed);
-        };
-        let start = kf.get("s").and_then(T::from_json);
-        let end = kf.get("e").and_then(T::from_json);
-        let start = match (start, out.last()) {
+fn keyframes<T: Animatable>(keys: &[schema::Keyframe<T>]) -> Result<Vec<Keyframe<T>>, Malformed> {
+    let mut out: Vec<Keyframe<T>> = Vec::with_capacity(keys.len());
+    for (n, kf) in keys.iter().enumerate() {
+        let time = kf.t.filter(|t| t.is_finite()).ok_or(Malformed)?;
+        let end = kf.e.clone().flatten();
+        let start = match (kf.s.clone(), out.last()) {
             (Some(s), _) => s,
             (None, Some(prev)) => prev.end.clone(),
-            (None, None) => match &end {
-                Some(e) => e.clone(),
-                None => return Err(PropError::Malformed),
-            },
+            (None, None) => end.clone().ok_or(Malformed)?,
         };
         // 5.x: the previous keyframe ends where this one starts (unless it had an `e`).
         if let Some(prev) = out.last_mut()
-            && keyframes[n - 1].get("e").is_none()
+            && keys[n - 1].e.is_none()
         {
             prev.end = start.clone();
         }
-        let hold = kf.get("h").is_some_and(|h| h.as_f64().is_some_and(|x| x != 0.0) || h.as_bool() == Some(true));
-        let spatial = match (kf.get("to").and_then(numbers), kf.get("ti").and_then(numbers)) {
-            (Some(to), Some(ti)) if to.len() >= 2 && ti.len() >= 2 => {
-                Some((Vec2::new(to[0], to[1]), Vec2::new(ti[0], ti[1])))
-            }
-            _ => None,
-        };
-        if let Some(prev) = out.last()
-            && time < prev.time
-        {
-            return Err(PropError::Malformed);
+        if out.last().is_some_and(|prev| time < prev.time) {
+            return Err(Malformed);
         }
+        let spatial = kf.to.zip(kf.ti);
         out.push(Keyframe {
             time,
             end: end.unwrap_or_else(|| start.clone()),
             start,
-            ease: eases(kf.get("o"), kf.get("i")),
-            hold,
+            ease: eases(&kf.o, &kf.i),
+            hold: kf.h,
             spatial,
         });
     }
     if out.is_empty() {
-        return Err(PropError::Malformed);
+        return Err(Malformed);
     }
-    Ok(Value::Animated(out))
+    Ok(out)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use serde_json::json;
+
+    fn parse_prop<T: Animatable + schema::FromJson>(k: &serde_json::Value) -> Result<Value<T>, Malformed> {
+        let k: schema::Value<T> = serde_json::from_value(k.clone()).map_err(|_| Malformed)?;
+        Value::from_schema(&k)
+    }
 
     #[test]
     fn linear_and_hold() {
