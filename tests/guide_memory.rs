@@ -1,13 +1,12 @@
 //! Peak memory of the streaming target path on a long, large sequence (issue 3: 400 frames of
-//! 1000×800 must stay far below holding every guide of every frame), asserted; and, ignored by
-//! default, CPU-time prints of the guide stages (timings belong in benchmarks: run them with
-//! `cargo test --release --test guide_memory -- --ignored --nocapture`).
+//! 1000×800 must stay far below holding every guide of every frame), asserted. The guide
+//! stages' speed is measured by `cargo bench --bench guides` (timings belong in benchmarks).
 //!
 //! The memory test counts the heap itself (a counting global allocator in this test binary):
 //! the peak of live heap bytes does not depend on how the allocator's arenas fragment, which
 //! made the process's peak resident set (`VmHWM`, printed too) vary by ±15 % between runs.
 
-use fluidymation::guide::{GuideParams, GuideStream, compute_sequence};
+use fluidymation::guide::{GuideParams, GuideStream};
 use fluidymation::img::Plane;
 use std::time::Instant;
 
@@ -110,38 +109,4 @@ fn streaming_memory_is_bounded_and_grows_only_by_design() {
         mb(by_design)
     );
     assert!(long_peak < 150_000_000, "peak heap {:.1} MB for 400 frames of {W}x{H}, bound 150 MB", mb(long_peak));
-}
-
-#[test]
-#[ignore]
-fn in_memory_only() {
-    let frames: Vec<_> = (0..16).map(blob).collect();
-    let (t0, c0) = (Instant::now(), cpu_seconds());
-    for _ in 0..2 {
-        std::hint::black_box(compute_sequence(&frames, &GuideParams::default()).unwrap());
-    }
-    eprintln!(
-        "in memory: {:.0} ms wall, {:.0} ms CPU per frame",
-        1000.0 * t0.elapsed().as_secs_f64() / 32.0,
-        1000.0 * (cpu_seconds() - c0) / 32.0
-    );
-}
-
-#[test]
-#[ignore]
-fn per_frame_cpu_time() {
-    let n = 16;
-    let frames: Vec<_> = (0..n).map(blob).collect();
-    let params = GuideParams::default();
-    let (t0, c0) = (Instant::now(), cpu_seconds());
-    let g = compute_sequence(&frames, &params).unwrap();
-    let (t1, c1) = (Instant::now(), cpu_seconds());
-    eprintln!(
-        "in memory {n} frames: {:.0} ms wall, {:.0} ms CPU per frame ({} mask px in frame 8)",
-        1000.0 * (t1 - t0).as_secs_f64() / n as f64,
-        1000.0 * (c1 - c0) / n as f64,
-        g[8].mask.count()
-    );
-    drop(g);
-    run_stream(n);
 }
