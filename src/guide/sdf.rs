@@ -13,6 +13,10 @@
 //! **No boundary.** When the other set is empty (an empty mask, or a mask covering the whole
 //! image) every pixel gets `±`[`no_boundary_distance`]`(w, h)` (the image diagonal, larger than
 //! any real distance): positive for a full mask, negative for an empty one. No infinities.
+//!
+//! This is the crate's one exact distance transform: the metrics ([`crate::eval::Shape`], which
+//! keeps its own `±(w + h)` for masks without a boundary) and the border-width estimate
+//! ([`crate::exemplar::border`]) use it too.
 
 use crate::img::{Mask, Plane, Rect};
 use rayon::prelude::*;
@@ -282,143 +286,5 @@ mod tests {
         let d = sdf(&mask);
         assert!((d.get(0, 19) - (0.5 - ((140.0f64 * 140.0 + 16.0 * 16.0).sqrt() as f32))).abs() < 1e-4);
         assert_eq!(d.get(140, 3), 0.5);
-    }
-}
-
-/// Temporary check for issue 18 ("One of each"): [`sdf`] against the two other exact transforms
-/// of the crate (`eval::shape::signed_distance`, `exemplar::border::signed_distance`), bit for
-/// bit, before they are replaced by it.
-#[cfg(test)]
-mod same_as_old_transforms {
-    use super::*;
-
-    fn xorshift_mask(w: usize, h: usize, density: f64, seed: u64) -> Mask {
-        let mut s = seed | 1;
-        Plane::from_fn(w, h, |_, _| {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            ((s >> 11) as f64 / (1u64 << 53) as f64) < density
-        })
-    }
-
-    fn masks() -> Vec<Mask> {
-        let mut v = Vec::new();
-        let sizes = [
-            (1, 1),
-            (1, 9),
-            (9, 1),
-            (2, 2),
-            (7, 3),
-            (3, 7),
-            (16, 11),
-            (23, 23),
-            (64, 5),
-            (5, 64),
-            (100, 100),
-            (257, 129),
-        ];
-        let mut seed = 1u64;
-        for &(w, h) in &sizes {
-            for density in [0.0, 0.01, 0.05, 0.3, 0.5, 0.7, 0.95, 0.99, 1.0] {
-                for _ in 0..3 {
-                    seed += 0x9e37_79b9;
-                    v.push(xorshift_mask(w, h, density, seed));
-                }
-            }
-            for (px, py) in [(0, 0), (w - 1, h - 1), (w / 2, h / 3)] {
-                let mut m = Plane::filled(w, h, false);
-                m.set(px, py, true);
-                v.push(m.map(|b| !b));
-                v.push(m);
-            }
-            // Thin lines: a row, a column, a diagonal, a checkerboard, a ring, a blob.
-            v.push(Plane::from_fn(w, h, |_, y| y == h / 2));
-            v.push(Plane::from_fn(w, h, |x, _| x == w / 3));
-            v.push(Plane::from_fn(w, h, |x, y| x == y));
-            v.push(Plane::from_fn(w, h, |x, y| (x + y) % 2 == 0));
-            let (cx, cy, r) = (w as f32 / 2.0, h as f32 / 2.0, w.min(h) as f32 / 3.0);
-            v.push(Plane::from_fn(w, h, |x, y| ((x as f32 - cx).hypot(y as f32 - cy) - r).abs() < 1.0));
-            v.push(Plane::from_fn(w, h, |x, y| (x as f32 - cx).hypot(y as f32 - cy) <= r));
-        }
-        v
-    }
-
-    /// Large masks, with squared distances beyond 2²⁴ (where `f32` stops holding every integer).
-    fn large_masks() -> Vec<Mask> {
-        let mut v = Vec::new();
-        let mut m = Plane::filled(3000, 3000, false);
-        m.set(0, 0, true);
-        v.push(m.map(|b| !b));
-        v.push(m);
-        v.push(Plane::from_fn(4096, 12, |x, y| x == 4095 && y == 6));
-        v.push(Plane::from_fn(2100, 2100, |x, y| (x as f32 - 1050.0).hypot(y as f32 - 1000.0) <= 1000.0));
-        v.push(xorshift_mask(2500, 1800, 0.0005, 77));
-        v.push(xorshift_mask(1500, 1500, 0.9999, 78));
-        v
-    }
-
-    fn no_boundary(mask: &Mask) -> bool {
-        let c = mask.count();
-        c == 0 || c == mask.len()
-    }
-
-    fn bits(p: &[f32]) -> Vec<u32> {
-        p.iter().map(|v| v.to_bits()).collect()
-    }
-
-    /// eval: equal everywhere once the masks without a boundary get eval's `±(w + h)`.
-    /// border: equal everywhere on every mask with a boundary.
-    fn check(mask: &Mask) {
-        let (w, h) = mask.size();
-        let new = sdf(mask);
-        let eval_new = if no_boundary(mask) {
-            let cap = (w + h) as f32;
-            Plane::filled(w, h, if mask.count() == 0 { -cap } else { cap })
-        } else {
-            new.clone()
-        };
-        let eval_old = crate::eval::signed_distance(mask);
-        assert_eq!(bits(eval_old.data()), bits(eval_new.data()), "eval {w}x{h}");
-        if !no_boundary(mask) {
-            let border_old = crate::exemplar::border::signed_distance(mask.data(), w, h);
-            let diff = border_old.iter().zip(new.data()).filter(|(a, b)| a.to_bits() != b.to_bits()).count();
-            assert_eq!(diff, 0, "border {w}x{h}: {diff} pixels differ");
-        }
-    }
-
-    #[test]
-    fn equal_bit_for_bit() {
-        let all = masks();
-        for m in &all {
-            check(m);
-        }
-        eprintln!("{} masks equal", all.len());
-    }
-
-    /// The border estimate's `f32` transform is not exact here: report how far it is off, and
-    /// on how many inside pixels (the only ones the estimate reads) its whole-pixel bin moves.
-    #[test]
-    fn equal_bit_for_bit_on_large_masks() {
-        for m in &large_masks() {
-            let (w, h) = m.size();
-            let new = sdf(m);
-            let eval_old = crate::eval::signed_distance(m);
-            assert_eq!(bits(eval_old.data()), bits(new.data()), "eval {w}x{h}");
-            let border_old = crate::exemplar::border::signed_distance(m.data(), w, h);
-            let (mut diff, mut max, mut bins) = (0, 0f32, 0);
-            for ((a, b), &inside) in border_old.iter().zip(new.data()).zip(m.data()) {
-                if a.to_bits() != b.to_bits() {
-                    diff += 1;
-                    max = max.max((a - b).abs());
-                    if inside && a.max(0.0) as usize != b.max(0.0) as usize {
-                        bins += 1;
-                    }
-                }
-            }
-            eprintln!(
-                "{w}x{h}: eval equal; border: {diff} pixels differ, by at most {max}, {bins} inside pixels change bin"
-            );
-        }
     }
 }
