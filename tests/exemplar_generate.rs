@@ -1,7 +1,6 @@
 //! The watercolor generator: determinism, growth, rims, validation.
 
 use fluidymation::NoProgress;
-use fluidymation::exemplar::border::signed_distance;
 use fluidymation::exemplar::generate::{GeneratorParams, Pigment, generate};
 
 fn small() -> GeneratorParams {
@@ -48,10 +47,8 @@ fn mask_grows_over_time() {
 /// (0–3 px inside the edge) and the interior (deeper than 8 px).
 fn rim_and_interior(p: &GeneratorParams) -> (f32, f32) {
     let ex = generate(p, "r", &NoProgress).unwrap();
-    let (w, h) = (ex.width(), ex.height());
     let last = ex.len() - 1;
-    let inside: Vec<bool> = ex.masks[last].data().iter().map(|&v| v >= 0.5).collect();
-    let dist = signed_distance(&inside, w, h);
+    let dist = fluidymation::guide::sdf(&ex.masks[last].threshold(0.5)).into_vec();
     let paper = ex.paper();
     let (mut rim, mut nr, mut int, mut ni) = (0.0, 0.0, 0.0, 0.0);
     for (i, c) in ex.frames[last].data().iter().enumerate() {

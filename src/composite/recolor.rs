@@ -5,7 +5,7 @@ use super::Recolor;
 use super::color::{fast_ln, ln_linear, rgb_to_linear, rgb_to_srgb, sanitize, srgb_to_linear};
 use crate::error::{Error, Result};
 use crate::exemplar::Exemplar;
-use crate::img::{Mask, Plane, Rgb, Rgba, sample_bilinear};
+use crate::img::{Mask, Plane, Rect, Rgb, Rgba, sample_bilinear};
 use rayon::prelude::*;
 
 /// Floor of linear-light intensities before taking logarithms (density ≤ ln 10⁴ ≈ 9.2).
@@ -258,23 +258,15 @@ pub fn recolor_with(
     check_size("mask size", mask.size(), stylized.size())?;
     check_size("flat layer size", flat.size(), stylized.size())?;
     let (w, h) = stylized.size();
-    let bbox = bounding_box(mask);
-    let [x0, y0, x1, y1] = bbox;
-    let bw = x1 - x0;
     // The tint is computed on the box grown by a margin, so colors just outside it still
     // reach the mask's edge.
-    let grown = [
-        x0.saturating_sub(TINT_MARGIN),
-        y0.saturating_sub(TINT_MARGIN),
-        (x1 + TINT_MARGIN).min(w),
-        (y1 + TINT_MARGIN).min(h),
-    ];
-    let tint = if mode == Recolor::None || bw == 0 { None } else { Some(extended_tint(flat, mask, grown)) };
+    let grown = mask.bounding_box().filter(|_| mode != Recolor::None).map(|b| b.expand(TINT_MARGIN, w, h));
+    let tint = grown.map(|g| (g, extended_tint(flat, mask, g)));
     let paper_lin = rgb_to_linear(pigment.paper());
     Ok(layer(mask, mode, |x, y| {
         let c = stylized.get(x, y);
         match &tint {
-            Some(t) => (pigment.amount(c), t.get(x - grown[0], y - grown[1])),
+            Some((g, t)) => (pigment.amount(c), t.get(x - g.x0, y - g.y0)),
             None => {
                 let lin = rgb_to_linear(c);
                 (1.0, [0, 1, 2].map(|i| (lin[i] / paper_lin[i].max(INTENSITY_FLOOR)).min(1.0)))
@@ -295,7 +287,7 @@ pub fn painted(rgb: &Plane<Rgb>, mask: &Mask) -> Result<StylizedLayer> {
 /// `pixel(x, y)` = (pigment amount, linear color).
 fn layer(mask: &Mask, mode: Recolor, pixel: impl Fn(usize, usize) -> (f32, Rgb) + Sync) -> StylizedLayer {
     let (w, h) = mask.size();
-    let bbox = bounding_box(mask);
+    let bbox = mask.bounding_box().map_or([0; 4], |b| [b.x0, b.y0, b.x1, b.y1]);
     let [x0, y0, x1, y1] = bbox;
     let bw = x1 - x0;
     let mut px = vec![LayerPixel::default(); bw * (y1 - y0)];
@@ -325,28 +317,15 @@ fn layer(mask: &Mask, mode: Recolor, pixel: impl Fn(usize, usize) -> (f32, Rgb) 
 /// Margin (pixels) around the mask's bounding box from which flat colors are gathered.
 const TINT_MARGIN: usize = 16;
 
-/// `[x0, y0, x1, y1)` of the `true` pixels (`[0, 0, 0, 0]` when there are none).
-fn bounding_box(mask: &Mask) -> [usize; 4] {
-    let (w, h) = mask.size();
-    let mut b = [w, h, 0, 0];
-    for y in 0..h {
-        let row = mask.row(y);
-        if let (Some(first), Some(last)) = (row.iter().position(|&m| m), row.iter().rposition(|&m| m)) {
-            b = [b[0].min(first), b[1].min(y), b[2].max(last + 1), b[3].max(y + 1)];
-        }
-    }
-    if b[0] >= b[2] { [0; 4] } else { b }
-}
-
 /// The flat rendering's color in linear light, defined everywhere: the straight color where
 /// the coverage is full, blended towards the colors of the nearest covered pixels where it is
 /// partial or zero (pull–push filling, Gortler et al. 1996: coarser levels take the
 /// coverage-weighted mean color of their children with the weight `min(1, Σ w)`, so a coarse
 /// pixel with one fully covered child is fully trusted; finer levels are then completed with
-/// `c = w·c + (1 − w)·coarse`). Computed on `region` `[x0, y0, x1, y1)` (non-empty) only;
+/// `c = w·c + (1 − w)·coarse`). Computed on `region` (non-empty) only;
 /// only pixels inside `mask` matter.
-fn extended_tint(flat: &Plane<Rgba>, mask: &Mask, region: [usize; 4]) -> Plane<Rgb> {
-    let [rx, ry, rx1, ry1] = region;
+fn extended_tint(flat: &Plane<Rgba>, mask: &Mask, region: Rect) -> Plane<Rgb> {
+    let Rect { x0: rx, y0: ry, x1: rx1, y1: ry1 } = region;
     // Straight linear color and weight (the coverage).
     let level0: Plane<[f32; 4]> = Plane::from_fn(rx1 - rx, ry1 - ry, |x, y| {
         let c = flat.get(rx + x, ry + y);
@@ -433,19 +412,12 @@ mod tests {
             if x < 16 { [1.0, 0.0, 0.0, a] } else { [0.0, 1.0, 0.0, a] }
         });
         let mask = Plane::filled(32, 32, true);
-        let t = extended_tint(&flat, &mask, [0, 0, 32, 32]);
+        let t = extended_tint(&flat, &mask, Rect::full(32, 32));
         assert_eq!(t.get(3, 10), [1.0, 0.0, 0.0]);
         // Margin rows take the color of the covered pixels below/above them.
         let m = t.get(3, 2);
         assert!(m[0] > 0.8 && m[1] < 0.2, "{m:?}");
         let m = t.get(28, 30);
         assert!(m[1] > 0.8 && m[0] < 0.2, "{m:?}");
-    }
-
-    #[test]
-    fn bounding_box_of_mask() {
-        let m = Plane::from_fn(10, 8, |x, y| (2..5).contains(&x) && (3..7).contains(&y));
-        assert_eq!(bounding_box(&m), [2, 3, 5, 7]);
-        assert_eq!(bounding_box(&Plane::filled(4, 4, false)), [0; 4]);
     }
 }

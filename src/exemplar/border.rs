@@ -7,8 +7,8 @@
 //! look stops depending on that distance. We measure exactly that:
 //!
 //! 1. for every frame, the exact Euclidean distance of each painted pixel to the nearest
-//!    unpainted one ([`signed_distance`], a two-pass separable transform after Felzenszwalb
-//!    and Huttenlocher);
+//!    unpainted one (the guides' signed distance field, [`crate::guide::sdf()`]; a frame
+//!    painted everywhere has no edge to measure from and is skipped);
 //! 2. two texture statistics per pixel: **darkness**, the optical density
 //!    `−ln(I / paper)` averaged over RGB, and **contrast**, the absolute difference between
 //!    that density and its 3×3 mean (granulation, fine structure);
@@ -41,84 +41,6 @@ pub struct BorderEstimate {
 
 /// Fallback when an exemplar's masks are too small to measure anything (pixels).
 pub const FALLBACK_WIDTH: f32 = 10.0;
-
-const INF: f32 = 1e20;
-
-/// 1D squared distance transform of `f` (Felzenszwalb & Huttenlocher 2012), into `out`.
-fn dt1d(f: &[f32], out: &mut [f32], v: &mut [usize], z: &mut [f32]) {
-    let n = f.len();
-    let mut k = 0usize;
-    v[0] = 0;
-    z[0] = -INF;
-    z[1] = INF;
-    for q in 1..n {
-        loop {
-            let p = v[k];
-            let s = ((f[q] + (q * q) as f32) - (f[p] + (p * p) as f32)) / (2.0 * (q as f32 - p as f32));
-            if s <= z[k] && k > 0 {
-                k -= 1;
-            } else if s <= z[k] {
-                // k == 0 and the parabola at q hides the one at v[0] everywhere.
-                v[0] = q;
-                z[1] = INF;
-                break;
-            } else {
-                k += 1;
-                v[k] = q;
-                z[k] = s;
-                z[k + 1] = INF;
-                break;
-            }
-        }
-    }
-    k = 0;
-    for (q, o) in out.iter_mut().enumerate() {
-        while z[k + 1] < q as f32 {
-            k += 1;
-        }
-        let p = v[k];
-        let d = q as f32 - p as f32;
-        *o = d * d + f[p];
-    }
-}
-
-/// Exact squared Euclidean distance from every pixel to the nearest pixel where `seed` is
-/// true (`INF`-like when there is none).
-fn squared_edt(seed: &[bool], w: usize, h: usize) -> Vec<f32> {
-    let mut grid: Vec<f32> = seed.iter().map(|&s| if s { 0.0 } else { INF }).collect();
-    let n = w.max(h);
-    let (mut f, mut out, mut v, mut z) = (vec![0.0; n], vec![0.0; n], vec![0usize; n], vec![0.0; n + 1]);
-    for x in 0..w {
-        for y in 0..h {
-            f[y] = grid[y * w + x];
-        }
-        dt1d(&f[..h], &mut out[..h], &mut v, &mut z);
-        for y in 0..h {
-            grid[y * w + x] = out[y];
-        }
-    }
-    for y in 0..h {
-        f[..w].copy_from_slice(&grid[y * w..(y + 1) * w]);
-        dt1d(&f[..w], &mut out[..w], &mut v, &mut z);
-        grid[y * w..(y + 1) * w].copy_from_slice(&out[..w]);
-    }
-    grid
-}
-
-/// Signed Euclidean distance to the edge of `mask` (`w × h`, row-major), positive inside:
-/// a painted pixel gets its distance to the nearest unpainted pixel minus ½, an unpainted
-/// one minus its distance to the nearest painted pixel plus ½ (so the edge sits between
-/// pixel centers). Without any pixel on one side, that side's distances are `w + h`.
-pub fn signed_distance(mask: &[bool], w: usize, h: usize) -> Vec<f32> {
-    let outside: Vec<bool> = mask.iter().map(|&m| !m).collect();
-    let to_out = squared_edt(&outside, w, h);
-    let to_in = squared_edt(mask, w, h);
-    let cap = (w + h) as f32;
-    mask.iter()
-        .enumerate()
-        .map(|(i, &m)| if m { (to_out[i].sqrt() - 0.5).min(cap) } else { -(to_in[i].sqrt() - 0.5).min(cap) })
-        .collect()
-}
 
 fn smooth121(v: &[f32]) -> Vec<f32> {
     (0..v.len())
@@ -156,8 +78,17 @@ pub fn estimate_border_width(ex: &Exemplar) -> BorderEstimate {
     let mut counts: Vec<usize> = Vec::new();
     for (frame, mask) in ex.frames.iter().zip(&ex.masks) {
         let (w, h) = frame.size();
-        let inside: Vec<bool> = mask.data().iter().map(|&m| m >= 0.5).collect();
-        let dist = signed_distance(&inside, w, h);
+        let painted = mask.threshold(0.5);
+        if painted.count() == painted.len() {
+            // No edge to measure from. (Before one SDF served the crate, such a frame's pixels
+            // went to bin `w + h`, which never reached the estimate: every real distance in a
+            // `w × h` frame is at most `√((w−1)² + (h−1)²) − ½ < w + h − 2`, so bin `w + h − 1`
+            // stayed empty and cut the valid bins off before it; the frames of an exemplar
+            // share one size.)
+            continue;
+        }
+        let dist = crate::guide::sdf(&painted);
+        let (inside, dist) = (painted.data(), dist.data());
         let od: Vec<f32> = frame
             .data()
             .iter()
@@ -207,46 +138,4 @@ pub fn estimate_border_width(ex: &Exemplar) -> BorderEstimate {
     let k0 = kd.max(kc);
     let width = (k0 as f32).clamp(2.0, end as f32);
     BorderEstimate { width: (width * 2.0).round() / 2.0, darkness, contrast, counts }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn brute(mask: &[bool], w: usize, h: usize) -> Vec<f32> {
-        (0..w * h)
-            .map(|i| {
-                let (x, y) = ((i % w) as f32, (i / w) as f32);
-                let best = (0..w * h)
-                    .filter(|&j| mask[j] != mask[i])
-                    .map(|j| ((j % w) as f32 - x).hypot((j / w) as f32 - y))
-                    .fold(f32::MAX, f32::min);
-                let best = best.min((w + h) as f32 + 0.5);
-                if mask[i] { best - 0.5 } else { -(best - 0.5) }
-            })
-            .collect()
-    }
-
-    #[test]
-    fn edt_matches_brute_force() {
-        let mut s = crate::rng::SplitMix64::new(3);
-        for (w, h) in [(1, 1), (7, 3), (13, 11), (20, 20)] {
-            let mask: Vec<bool> = (0..w * h).map(|_| s.next_f32() < 0.4).collect();
-            let fast = signed_distance(&mask, w, h);
-            let slow = brute(&mask, w, h);
-            for (a, b) in fast.iter().zip(&slow) {
-                assert!((a - b).abs() < 1e-3 || (a.abs() >= (w + h) as f32 - 1.0), "{a} vs {b} ({w}x{h})");
-            }
-        }
-    }
-
-    #[test]
-    fn disc_distance_is_radial() {
-        let (w, h) = (41, 41);
-        let mask: Vec<bool> =
-            (0..w * h).map(|i| ((i % w) as f32 - 20.0).hypot((i / w) as f32 - 20.0) <= 15.0).collect();
-        let d = signed_distance(&mask, w, h);
-        assert!((d[20 * w + 20] - 14.53).abs() < 0.01, "{}", d[20 * w + 20]);
-        assert!(d[20 * w + 40] < -3.0);
-    }
 }

@@ -4,62 +4,7 @@
 use crate::img::{Mask, Plane};
 use rayon::prelude::*;
 
-/// A pixel rectangle `[x0, x1) × [y0, y1)`; empty when either side is empty.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub(crate) struct Rect {
-    pub x0: usize,
-    pub y0: usize,
-    pub x1: usize,
-    pub y1: usize,
-}
-
-impl Rect {
-    /// The whole `w × h` image.
-    pub fn full(w: usize, h: usize) -> Self {
-        Rect { x0: 0, y0: 0, x1: w, y1: h }
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.x1 <= self.x0 || self.y1 <= self.y0
-    }
-
-    pub fn width(&self) -> usize {
-        self.x1.saturating_sub(self.x0)
-    }
-
-    pub fn height(&self) -> usize {
-        self.y1.saturating_sub(self.y0)
-    }
-
-    /// The smallest rectangle holding both.
-    pub fn union(self, o: Rect) -> Rect {
-        if self.is_empty() {
-            o
-        } else if o.is_empty() {
-            self
-        } else {
-            Rect { x0: self.x0.min(o.x0), y0: self.y0.min(o.y0), x1: self.x1.max(o.x1), y1: self.y1.max(o.y1) }
-        }
-    }
-
-    /// Grown by `m` pixels on every side, clipped to a `w × h` image.
-    pub fn expand(self, m: usize, w: usize, h: usize) -> Rect {
-        if self.is_empty() {
-            return self;
-        }
-        Rect {
-            x0: self.x0.saturating_sub(m),
-            y0: self.y0.saturating_sub(m),
-            x1: (self.x1 + m).min(w),
-            y1: (self.y1 + m).min(h),
-        }
-    }
-
-    #[inline]
-    pub fn contains(&self, x: usize, y: usize) -> bool {
-        x >= self.x0 && x < self.x1 && y >= self.y0 && y < self.y1
-    }
-}
+pub(crate) use crate::img::Rect;
 
 /// A plane covering `rect` of a larger image; pixels outside `rect` hold `T::default()`.
 #[derive(Clone, Debug, PartialEq)]
@@ -112,18 +57,8 @@ pub(crate) struct FrameMask {
 impl FrameMask {
     /// From a crop of any rectangle (values outside it are `false`); trims to the bounding box.
     pub fn from_crop(w: usize, h: usize, c: &Crop<bool>) -> Self {
-        let mut bb = Rect::default();
-        let mut count = 0;
-        for y in 0..c.rect.height() {
-            let row = c.plane.row(y);
-            if let Some(first) = row.iter().position(|&b| b) {
-                let last = row.iter().rposition(|&b| b).unwrap_or(first);
-                count += row.iter().filter(|&&b| b).count();
-                let r =
-                    Rect { x0: c.rect.x0 + first, x1: c.rect.x0 + last + 1, y0: c.rect.y0 + y, y1: c.rect.y0 + y + 1 };
-                bb = bb.union(r);
-            }
-        }
+        let bb = c.plane.bounding_box().map_or(Rect::default(), |b| b.offset(c.rect.x0, c.rect.y0));
+        let count = c.plane.count();
         let crop = Crop::from_full_crop(c, bb);
         let mut m = FrameMask { w, h, crop, count, boundary: Vec::new() };
         m.boundary = m.find_boundary();

@@ -744,20 +744,12 @@ pub fn solve(cells: &Plane<Cell>, values: &mut Plane<Vec2>, tolerance: f32) -> S
             return SolveReport { cycles: 0, residual: 0.0, threshold, converged: scale == 0.0 };
         }
         // Bounding box of the free cells.
-        let (mut x0, mut y0, mut x1, mut y1) = (w, h, 0, 0);
-        for y in 0..h {
-            let row = cells.row(y);
-            if let Some(first) = row.iter().position(|c| *c == Cell::Free) {
-                let last = row.iter().rposition(|c| *c == Cell::Free).unwrap_or(first);
-                (x0, x1, y0, y1) = (x0.min(first), x1.max(last + 1), y0.min(y), y + 1);
-            }
-        }
-        if x1 <= x0 {
+        let Some(free) = cells.bounds(|c| *c == Cell::Free) else {
             return SolveReport { cycles: 0, residual: 0.0, threshold, converged: true };
-        }
+        };
         // Grown by one pixel so the fixed cells around the free ones are on the grid: only the image
         // edge may stay off it (a Neumann side).
-        (x0, y0, x1, y1) = (x0.saturating_sub(1), y0.saturating_sub(1), (x1 + 1).min(w), (y1 + 1).min(h));
+        let crate::img::Rect { x0, y0, x1, y1 } = free.expand(1, w, h);
         let mut levels = build(cells, values, (x0, y0, x1 - x0, y1 - y0));
         let mut residual = levels[0].residual();
         let mut cycles = 0;

@@ -33,14 +33,7 @@ fn blurred_threshold(cov: &Plane<f32>, sigma: f32, threshold: f32) -> Crop<bool>
     let k = gaussian_kernel(sigma);
     let r = k.len() / 2;
     // Bounding box of the non-zero coverage.
-    let mut bb = Rect::default();
-    for y in 0..h {
-        let row = cov.row(y);
-        if let Some(first) = row.iter().position(|&v| v != 0.0) {
-            let last = row.iter().rposition(|&v| v != 0.0).unwrap_or(first);
-            bb = bb.union(Rect { x0: first, x1: last + 1, y0: y, y1: y + 1 });
-        }
-    }
+    let bb = cov.bounds(|&v| v != 0.0).unwrap_or_default();
     if bb.is_empty() || threshold <= 0.0 {
         // Nothing covered (or a threshold every pixel passes): no blur needed.
         let rect = Rect::full(w, h);

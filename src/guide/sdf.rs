@@ -13,8 +13,12 @@
 //! **No boundary.** When the other set is empty (an empty mask, or a mask covering the whole
 //! image) every pixel gets `±`[`no_boundary_distance`]`(w, h)` (the image diagonal, larger than
 //! any real distance): positive for a full mask, negative for an empty one. No infinities.
+//!
+//! This is the crate's one exact distance transform: the metrics ([`crate::eval::Shape`], which
+//! keeps its own `±(w + h)` for masks without a boundary) and the border-width estimate
+//! ([`crate::exemplar::border`]) use it too.
 
-use crate::img::{Mask, Plane};
+use crate::img::{Mask, Plane, Rect};
 use rayon::prelude::*;
 
 /// The magnitude of `dist` when the mask has no boundary (empty or full): the image diagonal
@@ -39,18 +43,11 @@ pub fn sdf(mask: &Mask) -> Plane<f32> {
         return Plane::new(w, h);
     }
     // Bounding box of the inside pixels.
-    let (mut x0, mut x1, mut y0, mut y1, mut count) = (w, 0, h, 0, 0usize);
-    for y in 0..h {
-        let row = mask.row(y);
-        if let Some(first) = row.iter().position(|&b| b) {
-            let last = row.iter().rposition(|&b| b).unwrap_or(first);
-            (x0, x1, y0, y1) = (x0.min(first), x1.max(last + 1), y0.min(y), y + 1);
-            count += row[first..=last].iter().filter(|&&b| b).count();
-        }
-    }
-    if count == 0 || count == w * h {
-        let d = no_boundary_distance(w, h);
-        return Plane::filled(w, h, if count == 0 { -d } else { d });
+    let Some(Rect { x0, y0, x1, y1 }) = mask.bounding_box() else {
+        return Plane::filled(w, h, -no_boundary_distance(w, h));
+    };
+    if (x1 - x0, y1 - y0) == (w, h) && mask.data().iter().all(|&b| b) {
+        return Plane::filled(w, h, no_boundary_distance(w, h));
     }
     // "No feature in this column" is a vertical distance larger than any real one.
     let inf = (w + h) as u32;

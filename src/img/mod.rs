@@ -32,6 +32,76 @@ pub struct Plane<T> {
 /// A binary mask: `true` where the medium (paint) is present.
 pub type Mask = Plane<bool>;
 
+/// A pixel rectangle `[x0, x1) × [y0, y1)`; empty when either side is empty.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Rect {
+    /// First column.
+    pub x0: usize,
+    /// First row.
+    pub y0: usize,
+    /// One past the last column.
+    pub x1: usize,
+    /// One past the last row.
+    pub y1: usize,
+}
+
+impl Rect {
+    /// The whole `w × h` image.
+    pub fn full(w: usize, h: usize) -> Self {
+        Rect { x0: 0, y0: 0, x1: w, y1: h }
+    }
+
+    /// True when the rectangle holds no pixel.
+    pub fn is_empty(&self) -> bool {
+        self.x1 <= self.x0 || self.y1 <= self.y0
+    }
+
+    /// Number of columns.
+    pub fn width(&self) -> usize {
+        self.x1.saturating_sub(self.x0)
+    }
+
+    /// Number of rows.
+    pub fn height(&self) -> usize {
+        self.y1.saturating_sub(self.y0)
+    }
+
+    /// The smallest rectangle holding both.
+    pub fn union(self, o: Rect) -> Rect {
+        if self.is_empty() {
+            o
+        } else if o.is_empty() {
+            self
+        } else {
+            Rect { x0: self.x0.min(o.x0), y0: self.y0.min(o.y0), x1: self.x1.max(o.x1), y1: self.y1.max(o.y1) }
+        }
+    }
+
+    /// Grown by `m` pixels on every side, clipped to a `w × h` image.
+    pub fn expand(self, m: usize, w: usize, h: usize) -> Rect {
+        if self.is_empty() {
+            return self;
+        }
+        Rect {
+            x0: self.x0.saturating_sub(m),
+            y0: self.y0.saturating_sub(m),
+            x1: (self.x1 + m).min(w),
+            y1: (self.y1 + m).min(h),
+        }
+    }
+
+    /// Moved by `(dx, dy)`.
+    pub fn offset(self, dx: usize, dy: usize) -> Rect {
+        Rect { x0: self.x0 + dx, y0: self.y0 + dy, x1: self.x1 + dx, y1: self.y1 + dy }
+    }
+
+    /// True when pixel `(x, y)` lies inside.
+    #[inline]
+    pub fn contains(&self, x: usize, y: usize) -> bool {
+        x >= self.x0 && x < self.x1 && y >= self.y0 && y < self.y1
+    }
+}
+
 /// Calls `f` with the row-major index of each 4-connected neighbour of pixel `i` in a
 /// `w`-wide, `h`-high image: left, right, up, down (those inside the image).
 #[inline]
@@ -179,6 +249,20 @@ impl<T: Copy> Plane<T> {
         })
     }
 
+    /// The bounding box of the pixels where `inside` holds; `None` when there are none.
+    pub fn bounds(&self, mut inside: impl FnMut(&T) -> bool) -> Option<Rect> {
+        let mut b: Option<Rect> = None;
+        for y in 0..self.height {
+            let row = self.row(y);
+            if let Some(first) = row.iter().position(&mut inside) {
+                let last = row.iter().rposition(&mut inside).unwrap_or(first);
+                let r = Rect { x0: first, y0: y, x1: last + 1, y1: y + 1 };
+                b = Some(b.map_or(r, |b| b.union(r)));
+            }
+        }
+        b
+    }
+
     /// True when `(x, y)` (signed) lies inside the plane.
     #[inline]
     pub fn contains(&self, x: isize, y: isize) -> bool {
@@ -190,6 +274,11 @@ impl Plane<bool> {
     /// Number of `true` pixels (`|I|` in the papers).
     pub fn count(&self) -> usize {
         self.data.iter().filter(|&&b| b).count()
+    }
+
+    /// The bounding box of the `true` pixels; `None` for an empty mask.
+    pub fn bounding_box(&self) -> Option<Rect> {
+        self.bounds(|&b| b)
     }
 
     /// The mask as a coverage plane (1 inside, 0 outside).
@@ -268,5 +357,19 @@ mod tests {
         assert!(Plane::from_vec(2, 2, vec![0u8; 3]).is_none());
         let m = p.threshold(11.0);
         assert_eq!(m.count(), 2);
+    }
+
+    #[test]
+    fn bounding_boxes() {
+        let m = Plane::from_fn(8, 9, |x, y| (2..5).contains(&x) && (3..7).contains(&y) && (x + y) % 2 == 0);
+        assert_eq!(m.bounding_box(), Some(Rect { x0: 2, y0: 3, x1: 5, y1: 7 }));
+        assert_eq!(Plane::filled(4, 4, false).bounding_box(), None);
+        assert_eq!(Plane::filled(3, 2, true).bounding_box(), Some(Rect::full(3, 2)));
+        assert_eq!(Plane::<bool>::new(0, 3).bounding_box(), None);
+        let mut one = Plane::filled(5, 1, false);
+        one.set(4, 0, true);
+        assert_eq!(one.bounding_box(), Some(Rect { x0: 4, y0: 0, x1: 5, y1: 1 }));
+        let p = Plane::from_fn(6, 4, |x, y| if x == 1 && y == 2 || x == 4 && y == 0 { 0.5f32 } else { 0.0 });
+        assert_eq!(p.bounds(|&v| v != 0.0), Some(Rect { x0: 1, y0: 0, x1: 5, y1: 3 }));
     }
 }

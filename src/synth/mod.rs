@@ -651,20 +651,7 @@ impl Placement {
 /// mask.
 fn window(mask: &Mask, align: usize) -> Option<(usize, usize, usize, usize)> {
     let (w, h) = mask.size();
-    let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0usize, 0usize);
-    for y in 0..h {
-        let row = mask.row(y);
-        if let Some(first) = row.iter().position(|&b| b) {
-            let last = row.iter().rposition(|&b| b).unwrap_or(first);
-            x0 = x0.min(first);
-            x1 = x1.max(last + 1);
-            y0 = y0.min(y);
-            y1 = y1.max(y + 1);
-        }
-    }
-    if x0 == usize::MAX {
-        return None;
-    }
+    let crate::img::Rect { x0, y0, x1, y1 } = mask.bounding_box()?;
     let m = (HALF + 1) * align + 4;
     let (x0, y0) = (x0.saturating_sub(m) / align * align, y0.saturating_sub(m) / align * align);
     let (x1, y1) = ((x1 + m).min(w), (y1 + m).min(h));
