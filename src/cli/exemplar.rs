@@ -4,7 +4,7 @@ use super::Ctx;
 use anyhow::{Context, bail};
 use fluidymation::exemplar::generate::{self, GeneratorParams, Pigment};
 use fluidymation::exemplar::import::{self, ImportOptions};
-use fluidymation::exemplar::{self, Exemplar, SearchPath, Source};
+use fluidymation::exemplar::{self, Exemplar, Origin, SearchPath};
 use fluidymation::progress::{NoProgress, Progress};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -280,7 +280,7 @@ fn target_dir(output: Option<PathBuf>, name: &str, force: bool, search: &SearchP
     let parent = match output {
         Some(o) => o,
         None => search
-            .first(Source::User)
+            .first(Origin::User)
             .map(Path::to_path_buf)
             .context("no user exemplar folder (HOME is not set); pass -o DIR")?,
     };
