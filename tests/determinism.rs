@@ -28,7 +28,6 @@ fn byte_identical_output_at_1_2_3_8_and_16_threads() {
         let out = root.join(threads.to_string());
         let mut opts = RenderOptions::new(out.clone(), 0..3);
         opts.params = Params::builder().seed(7).build().unwrap();
-        opts.scale = 0.5;
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| render::render(&a, &opts, &NoProgress)).unwrap();
         files(&out)
@@ -63,7 +62,6 @@ fn engine_output_is_pinned() {
     let out = std::env::temp_dir().join(format!("fm-pinned-{}", std::process::id()));
     let mut opts = RenderOptions::new(out.clone(), 0..4);
     opts.params = Params::builder().seed(7).build().unwrap();
-    opts.scale = 0.5;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
     pool.install(|| render::render(&a, &opts, &NoProgress)).unwrap();
     let mut pixels = Vec::new();

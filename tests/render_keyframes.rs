@@ -89,7 +89,6 @@ fn a_painted_layer_follows_its_painting_and_the_others_keep_their_style() {
     )
     .unwrap();
     let mut preview = RenderOptions::new(dir.join("preview"), 22..25);
-    preview.scale = 0.5;
     preview.keyframes = vec![(key, file.clone())];
     let summary = render::render(&half, &preview, &NoProgress).unwrap();
     let dress = summary.layers.iter().find(|l| l.name == "dress").unwrap();

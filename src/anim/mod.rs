@@ -157,7 +157,7 @@ impl RegionFrame {
 }
 
 /// Renders the regions of a loaded animation. Implemented by each input format.
-pub trait RegionRenderer: Send + Sync {
+pub(crate) trait RegionRenderer: Send + Sync {
     /// Renders region number `region` (position in [`Animation::regions`]) at frame `frame`
     /// at the animation's (scaled) size.
     fn render(&self, region: usize, frame: usize) -> Result<RegionFrame>;
@@ -181,6 +181,8 @@ pub struct Animation {
     pub background: Option<Background>,
     /// Problems that concern the whole file.
     pub warnings: Vec<String>,
+    /// The [`LoadOptions::scale`] it was loaded with ([`Animation::scale`]).
+    scale: f32,
     renderer: Box<dyn RegionRenderer>,
 }
 
@@ -192,6 +194,7 @@ impl std::fmt::Debug for Animation {
             .field("height", &self.height)
             .field("fps", &self.fps)
             .field("frames", &self.frames)
+            .field("scale", &self.scale)
             .field("regions", &self.regions)
             .field("background", &self.background)
             .finish_non_exhaustive()
@@ -199,9 +202,10 @@ impl std::fmt::Debug for Animation {
 }
 
 impl Animation {
-    /// Assembles an animation from its parts (used by the format readers).
+    /// Assembles an animation from its parts (used by the format readers), at scale 1 until
+    /// [`load`] sets the scale it was loaded with.
     #[allow(clippy::too_many_arguments)]
-    pub fn new(
+    pub(crate) fn new(
         path: PathBuf,
         width: u32,
         height: u32,
@@ -212,7 +216,14 @@ impl Animation {
         warnings: Vec<String>,
         renderer: Box<dyn RegionRenderer>,
     ) -> Self {
-        Animation { path, width, height, fps, frames, regions, background, warnings, renderer }
+        Animation { path, width, height, fps, frames, regions, background, warnings, scale: 1.0, renderer }
+    }
+
+    /// The scale the canvas was loaded at ([`LoadOptions::scale`]; 0.5 = a half-size preview).
+    /// A render reads it from here to scale the paint texture along with the canvas, so that a
+    /// preview looks like the full render.
+    pub fn scale(&self) -> f32 {
+        self.scale
     }
 
     /// Renders region number `region` (position in [`Animation::regions`]) at `frame`.
@@ -311,6 +322,13 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Animation> {
     if !(options.scale > 0.0 && options.scale <= 16.0) {
         return Err(Error::param("scale", options.scale, "a number in (0, 16]"));
     }
+    let mut animation = read(path, options)?;
+    animation.scale = options.scale;
+    Ok(animation)
+}
+
+/// [`load`] by the input's format.
+fn read(path: &Path, options: &LoadOptions) -> Result<Animation> {
     let is_dir = path.is_dir();
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
     if is_dir || crate::seq::is_glob(path) {

@@ -120,7 +120,7 @@ fn layer_fingerprint(anim: &Animation, opts: &RenderOptions, input: u64, region:
             opts.exemplar_dirs,
             opts.strokes,
             opts.params,
-            opts.scale,
+            anim.scale(),
             anim.width,
             anim.height,
             anim.frames,
@@ -323,7 +323,7 @@ fn new_layer(
     opts: &RenderOptions,
     region: usize,
     range: &std::ops::Range<usize>,
-    st: &super::Style,
+    st: &super::Prepped,
     style: Option<usize>,
 ) -> Result<Layer> {
     let (synth, guides) = start_layer(anim, opts, region, range, st)?;
@@ -392,7 +392,7 @@ pub fn composite(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress
                     });
                 }
             }
-            Ok(Some(Pigment::from_exemplar(&cache.exemplar(style, &opts.exemplar_dirs)?)))
+            Ok(Some(Pigment::from_exemplar(&cache.exemplar(style, opts)?)))
         })
         .collect::<Result<_>>()?;
     let layer_dirs = prepare_outputs(anim, opts)?;
