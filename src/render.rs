@@ -3,20 +3,27 @@
 //! region's own colors, composited in z-order over the background and written as numbered PNG
 //! frames, optionally as stylized layers and a GIF.
 //!
+//! [`Render`] sets a render up step by step, with styles as values ([`Style`]: an exemplar by
+//! name, one in memory, a still image, or none) and the background as one ([`Background`]):
+//!
 //! ```no_run
-//! use fluidymation::{anim, render::{self, RenderOptions}, NoProgress};
+//! use fluidymation::{anim, render::{Background, Render, Style}, NoProgress};
 //! # fn main() -> fluidymation::Result<()> {
 //! let a = anim::load("fixtures/demo/waving.json".as_ref(), &Default::default())?;
-//! let mut opts = RenderOptions::new("out".into(), 0..a.frames);
-//! opts.gif = Some("out/demo.gif".into());
-//! opts.styles.push(("body".into(), "ink-rims".into()));
-//! let summary = render::render(&a, &opts, &NoProgress)?;
+//! let summary = Render::new(&a)
+//!     .style("dress", Style::named("ink-rims"))
+//!     .background(Background::Transparent)
+//!     .gif("out/demo.gif")
+//!     .run("out", &NoProgress)?;
 //! println!("{} frames, {:.2} s per frame", summary.frames, summary.seconds_per_frame());
 //! # Ok(()) }
 //! ```
 //!
+//! Under it, [`RenderOptions`] is the same set of choices as one value, which [`render()`],
+//! [`render_batch`] and the jobs below take ([`Render::into_options`] gives it).
+//!
 //! An interrupted render keeps, after every completed frame, the state each layer's
-//! synthesizer carries to the next frame in `OUT_DIR/.fluidymation/` ([`crate::resume`]);
+//! synthesizer carries to the next frame in `OUT_DIR/.fluidymation/` ([`STATE_DIR`]);
 //! [`RenderOptions::resume`] continues from there and gives the same frames as an
 //! uninterrupted run. Every piece of that state is checked before it is used: a damaged or
 //! foreign state is an error, and frames changed since they were written are rendered again.
@@ -31,7 +38,7 @@
 //! in the exemplar's colors, with its own checkpoints) and one per file ([`composite()`]:
 //! recoloring and compositing the painted layers into frames and a GIF) — which a job
 //! scheduler can run on many machines. All three give the same bytes: the painted layer
-//! passes through the same 16-bit quantization ([`paint`]) whether it stays in memory or is
+//! passes through the same 16-bit quantization (to 16-bit PNG) whether it stays in memory or is
 //! written to disk in between.
 
 use crate::anim::{Animation, RegionFrame};
@@ -53,8 +60,8 @@ use std::time::Instant;
 mod batch;
 mod builder;
 mod jobs;
-pub mod keys;
-pub mod paint;
+pub(crate) mod keys;
+pub(crate) mod paint;
 mod style;
 
 pub use crate::composite::{Recolor, StrokeMode};
@@ -107,7 +114,7 @@ pub struct RenderOptions {
     /// canvas's size (or the animation's unscaled size, resized along with
     /// [`Animation::scale`]).
     /// The layers a painting paints are painted from the paintings in every frame, the others
-    /// keep their style (module [`keys`]).
+    /// keep their style.
     pub keyframes: Vec<(usize, PathBuf)>,
 }
 

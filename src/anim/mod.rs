@@ -11,7 +11,7 @@
 //!   region unless [`LoadOptions::split_precomps`]); nulls, matte sources, hidden and fully
 //!   transparent helper layers are not regions; the bottom full-canvas solids are the
 //!   [`Background`]. Frame 0 is the composition's `ip`.
-//! - a directory or `dir/*.svg` glob of SVG frames ([`svg`]): regions are the top-level
+//! - a directory or `dir/*.svg` glob of SVG frames: regions are the top-level
 //!   groups, identified across frames by name; shapes outside groups form one `root` region.
 //!   Played at 24 fps.
 //! - a directory of PNG masks: one region, 24 fps.
@@ -28,7 +28,7 @@
 
 pub mod lottie;
 mod masks;
-pub mod svg;
+pub(crate) mod svg;
 
 use crate::error::{Error, Result};
 use crate::img::{Plane, Rgba};

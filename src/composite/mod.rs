@@ -71,10 +71,8 @@ mod color;
 mod recolor;
 
 pub use background::{Background, WHITE};
-pub use color::{linear_to_srgb, parse_color, srgb_to_linear};
-pub use recolor::{
-    INTENSITY_FLOOR, MAX_AMOUNT, MIN_REFERENCE_DENSITY, Pigment, StylizedLayer, painted, recolor, recolor_with,
-};
+pub use color::parse_color;
+pub use recolor::{INTENSITY_FLOOR, Pigment, StylizedLayer, painted, recolor_with};
 
 use crate::error::{Error, Result};
 use crate::img::{Plane, Rgb, Rgba};
@@ -373,3 +371,6 @@ fn draw_stylized(layer: &StylizedLayer, y: usize, acc: &mut [[f32; 4]], base: &[
         }
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -74,7 +74,7 @@ impl StyleCache {
 
 /// Renders every `(animation, options, progress)` of `files`, at most `at_once` files at the
 /// same time (each with its layers in parallel on the shared rayon pool), with one
-/// [`StyleCache`]. Returns each file's result in the order given; an error in one file does
+/// cache of exemplars and prepared sources. Returns each file's result in the order given; an error in one file does
 /// not stop the others.
 ///
 /// The output of each file is the same as [`render`](super::render) alone gives.

@@ -162,7 +162,7 @@ fn lock(dir: &Path) -> Result<std::fs::File> {
 }
 
 /// Paints region `region` of `anim` (its position in [`Animation::regions`]) as `opts` says,
-/// into `opts.out_dir/layers/NN_name/`: `paint/NNNN.png` ([`Paint`]), checkpoints in
+/// into `opts.out_dir/layers/NN_name/`: `paint/NNNN.png` (16-bit RGBA in the exemplar's colors), checkpoints in
 /// `.fluidymation/` while it runs, [`LAYER_MANIFEST`] when complete, and a `.lock` held while
 /// it runs (a second run of the same job waits for the first). A complete job with the same
 /// options whose painted frames are as it wrote them is not done again; an interrupted one

@@ -21,7 +21,7 @@
 //! the pixel in painting A — a position that moves with the paint, so each bit of paint changes
 //! from A's to B's once, in blobs of about [`CELL`] pixels that grow as t rises, and the blobs
 //! travel with the shape instead of swimming over it. Only across the seam between a blob of A
-//! and one of B are the two cross-faded, over [`SEAM`] pixels to each side, which softens the
+//! and one of B are the two cross-faded, over `SEAM` (1) pixel to each side, which softens the
 //! blobs' straight edges without a visible blend.
 //!
 //! Simplifications (see the README): Bénard et al. select per pixel at random with the same
