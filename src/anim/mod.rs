@@ -268,7 +268,7 @@ impl Animation {
 
 /// Area-weighted color histogram (5 bits per channel) for a region's dominant color.
 #[derive(Clone, Debug, Default)]
-pub struct ColorHistogram {
+pub(crate) struct ColorHistogram {
     bins: std::collections::HashMap<u16, (f64, [f64; 3])>,
 }
 
