@@ -14,7 +14,7 @@ fn main() -> fluidymation::Result<()> {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     // A quarter-size preview: the animation knows its scale, and the render scales the paint
     // texture along with it.
-    let demo = anim::load(&root.join("fixtures/demo/waving.json"), &LoadOptions { scale: 0.25, ..Default::default() })?;
+    let demo = anim::load(&root.join("fixtures/demo/waving.json"), &LoadOptions::default().scale(0.25))?;
     println!(
         "{}: {}x{}, {} frames at scale {}",
         demo.path.display(),

@@ -12,7 +12,7 @@
 //! # fn main() -> fluidymation::Result<()> {
 //! // A quick half-size preview: the animation remembers its scale, and the paint texture
 //! // is scaled along with the canvas.
-//! let a = anim::load("fixtures/demo/waving.json".as_ref(), &LoadOptions { scale: 0.5, ..Default::default() })?;
+//! let a = anim::load("fixtures/demo/waving.json".as_ref(), &LoadOptions::default().scale(0.5))?;
 //! // An exemplar in memory (it could as well be generated or imported).
 //! let ink = exemplar::find("ink-rims", &SearchPath::standard(&[]))?;
 //! let summary = Render::new(&a)

@@ -40,8 +40,9 @@ pub const MAX_SIDE: u32 = 16384;
 /// Largest frame count accepted.
 pub const MAX_FRAMES: usize = 100_000;
 
-/// Options for [`load`].
+/// Options for [`load`]: `LoadOptions::default().scale(0.5)`.
 #[derive(Clone, Debug)]
+#[non_exhaustive]
 pub struct LoadOptions {
     /// Uniform scale applied to the canvas (0.5 = half size previews). Default: 1.
     pub scale: f32,
@@ -53,6 +54,20 @@ pub struct LoadOptions {
 impl Default for LoadOptions {
     fn default() -> Self {
         LoadOptions { scale: 1.0, split_precomps: false }
+    }
+}
+
+impl LoadOptions {
+    /// Sets [`LoadOptions::scale`], in `(0, 16]` (checked by [`load`]). Default: 1.
+    pub fn scale(mut self, scale: f32) -> Self {
+        self.scale = scale;
+        self
+    }
+
+    /// Sets [`LoadOptions::split_precomps`]. Default: false.
+    pub fn split_precomps(mut self, yes: bool) -> Self {
+        self.split_precomps = yes;
+        self
     }
 }
 

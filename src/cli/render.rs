@@ -243,7 +243,7 @@ pub fn output_layout(
 
 /// Loads one input with the scale and precomp options, printing its warnings.
 pub fn load_input(input: &Path, args: &RenderArgs) -> Result<Animation> {
-    let load = LoadOptions { scale: args.scale, split_precomps: args.split_precomps };
+    let load = LoadOptions::default().scale(args.scale).split_precomps(args.split_precomps);
     let anim = anim::load(input, &load).with_context(|| format!("could not load '{}'", input.display()))?;
     for w in &anim.warnings {
         log::warn!("{}: {}", input.display(), w);

@@ -20,7 +20,7 @@ use std::sync::Arc;
 /// use fluidymation::render::{Background, Render, Style};
 /// use fluidymation::NoProgress;
 /// # fn main() -> fluidymation::Result<()> {
-/// let a = anim::load("fixtures/demo/waving.json".as_ref(), &LoadOptions { scale: 0.5, ..Default::default() })?;
+/// let a = anim::load("fixtures/demo/waving.json".as_ref(), &LoadOptions::default().scale(0.5))?;
 /// let ink = exemplar::find("ink-rims", &SearchPath::standard(&[]))?;
 /// let summary = Render::new(&a)
 ///     .style_all(Style::named("blue-bloom"))

@@ -278,7 +278,7 @@ fn check(dir: &Path) {
     // at the scale that makes it ≤ 64 px (what is checked is the second load).
     let Ok(a) = anim::load(&frames, &LoadOptions::default()) else { return };
     let scale = (64.0 / a.width.max(a.height) as f32).min(1.0);
-    let Ok(a) = anim::load(&frames, &LoadOptions { scale, ..Default::default() }) else { return };
+    let Ok(a) = anim::load(&frames, &LoadOptions::default().scale(scale)) else { return };
     for (r, region) in a.regions.iter().enumerate().take(6) {
         for f in [region.visible.start, region.visible.end.saturating_sub(1)] {
             if let Ok(rf) = a.render(r, f) {
