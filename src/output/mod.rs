@@ -41,7 +41,7 @@ use std::path::{Path, PathBuf};
 
 /// Digits of frame numbers in file names: 4, or more when `frame_count` needs them, so names
 /// always sort in frame order.
-pub(crate) fn frame_digits(frame_count: usize) -> usize {
+pub fn frame_digits(frame_count: usize) -> usize {
     frame_count.max(1).to_string().len().max(4)
 }
 
