@@ -377,16 +377,14 @@ fn generate(a: GenerateArgs, search: &SearchPath, ctx: &Ctx) -> anyhow::Result<(
 
 fn import(a: ImportArgs, search: &SearchPath, ctx: &Ctx) -> anyhow::Result<()> {
     let dir = target_dir(a.output, &a.name, a.force, search)?;
-    let opts = ImportOptions {
-        name: a.name.clone(),
-        crop: a.crop,
-        scale: a.scale,
-        fps: a.fps,
-        threshold: a.threshold,
-        min_area: None,
-        description: a.description,
-        license: a.license,
-    };
+    let mut opts = ImportOptions::default()
+        .name(a.name.clone())
+        .scale(a.scale)
+        .fps(a.fps)
+        .description(a.description)
+        .license(a.license);
+    opts.crop = a.crop;
+    opts.threshold = a.threshold;
     let ex = {
         let bar = Bar::new(ctx);
         import::import(&a.src, &opts, bar.progress())
