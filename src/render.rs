@@ -607,7 +607,7 @@ fn render_fingerprint(anim: &Animation, opts: &RenderOptions, range: &Range<usiz
         p.styles_of,
         opts.recolor,
         opts.strokes,
-        opts.background,
+        opts.background.fingerprint_spec(),
         opts.params,
         anim.scale(),
         w * 100_000 + h,

@@ -178,6 +178,24 @@ impl Background {
         }
     }
 
+    /// The background as the resume fingerprint has always spelled it (the command line's
+    /// `Option<String>`): `None` for the animation's own, else a `--background` value — so
+    /// that a render interrupted by an earlier version resumes with this one.
+    pub(crate) fn fingerprint_spec(&self) -> Option<String> {
+        let hex = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+        match self {
+            Background::Animation => None,
+            Background::Transparent => Some("none".into()),
+            Background::Color([r, g, b, a]) if *a >= 1.0 => {
+                Some(format!("#{:02x}{:02x}{:02x}", hex(*r), hex(*g), hex(*b)))
+            }
+            Background::Color([r, g, b, a]) => {
+                Some(format!("#{:02x}{:02x}{:02x}{:02x}", hex(*r), hex(*g), hex(*b), hex(*a)))
+            }
+            Background::Image(path) => Some(path.to_string_lossy().into_owned()),
+        }
+    }
+
     /// The background of the composite for `anim`; an image is loaded and fitted to its canvas.
     pub(crate) fn resolve(&self, anim: &crate::anim::Animation) -> Result<composite::Background> {
         Ok(match self {
