@@ -240,3 +240,34 @@ impl FromStr for Background {
         Ok(Background::Image(Path::new(spec).to_path_buf()))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn styles_parse_and_key() {
+        assert_eq!("none".parse::<Style>().unwrap(), Style::None);
+        assert_eq!(Style::from("blue-bloom"), Style::named("blue-bloom"));
+        assert_eq!(Style::named(NO_STYLE).key(), None);
+        assert_eq!(Style::still("a/swatch.png").key().as_deref(), Some("a/swatch.png"));
+        let ex = exemplar::find("blue-swatch", &SearchPath::new().with_bundled(true)).unwrap();
+        let key = Style::exemplar(ex.clone()).key().unwrap();
+        assert!(key.starts_with("blue-swatch#"), "{key}");
+        assert_eq!(Style::exemplar(ex.clone()).key().unwrap(), key, "the same contents, the same key");
+        let mut other = ex;
+        other.frames[0].data_mut()[0][0] += 0.5;
+        assert_ne!(Style::exemplar(other).key().unwrap(), key, "other contents, another key");
+    }
+
+    #[test]
+    fn backgrounds_spell_as_the_command_line_did() {
+        let spec = |s: &str| s.parse::<Background>().unwrap().fingerprint_spec();
+        assert_eq!(Background::default().fingerprint_spec(), None);
+        assert_eq!(spec("none").as_deref(), Some("none"));
+        assert_eq!(spec("#f3ede2").as_deref(), Some("#f3ede2"));
+        assert_eq!(spec("#11223380").as_deref(), Some("#11223380"));
+        assert_eq!(spec("paper.png").as_deref(), Some("paper.png"));
+        assert!("  ".parse::<Background>().is_err());
+    }
+}
