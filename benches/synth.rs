@@ -1,5 +1,5 @@
 //! One synthesized frame of the engine (issue 5), on the horse-like workload of
-//! [`fluidymation::workload`] scaled to 500×400 (≈ 27 000 masked pixels, a quarter of the
+//! `src/cli/workload.rs` scaled to 500×400 (≈ 27 000 masked pixels, a quarter of the
 //! paper's `horse`) so that a criterion sample stays short; the full-size end-to-end figure
 //! comes from `fluidymation bench`.
 //!
@@ -12,10 +12,12 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use fluidymation::guide::{FrameGuides, GuideStream};
 use fluidymation::synth::{Params, Source, Synthesizer};
-use fluidymation::workload;
 use std::hint::black_box;
 use std::path::Path;
 use std::time::Duration;
+
+#[path = "../src/cli/workload.rs"]
+mod workload;
 
 const W: usize = 500;
 const H: usize = 400;

@@ -3,20 +3,27 @@
 //! region's own colors, composited in z-order over the background and written as numbered PNG
 //! frames, optionally as stylized layers and a GIF.
 //!
+//! [`Render`] sets a render up step by step, with styles as values ([`Style`]: an exemplar by
+//! name, one in memory, a still image, or none) and the background as one ([`Background`]):
+//!
 //! ```no_run
-//! use fluidymation::{anim, render::{self, RenderOptions}, NoProgress};
+//! use fluidymation::{anim, render::{Background, Render, Style}, NoProgress};
 //! # fn main() -> fluidymation::Result<()> {
 //! let a = anim::load("fixtures/demo/waving.json".as_ref(), &Default::default())?;
-//! let mut opts = RenderOptions::new("out".into(), 0..a.frames);
-//! opts.gif = Some("out/demo.gif".into());
-//! opts.styles.push(("body".into(), "ink-rims".into()));
-//! let summary = render::render(&a, &opts, &NoProgress)?;
+//! let summary = Render::new(&a)
+//!     .style("dress", Style::named("ink-rims"))
+//!     .background(Background::Transparent)
+//!     .gif("out/demo.gif")
+//!     .run("out", &NoProgress)?;
 //! println!("{} frames, {:.2} s per frame", summary.frames, summary.seconds_per_frame());
 //! # Ok(()) }
 //! ```
 //!
+//! Under it, [`RenderOptions`] is the same set of choices as one value, which [`render()`],
+//! [`render_batch`] and the jobs below take ([`Render::into_options`] gives it).
+//!
 //! An interrupted render keeps, after every completed frame, the state each layer's
-//! synthesizer carries to the next frame in `OUT_DIR/.fluidymation/` ([`crate::resume`]);
+//! synthesizer carries to the next frame in `OUT_DIR/.fluidymation/` ([`STATE_DIR`]);
 //! [`RenderOptions::resume`] continues from there and gives the same frames as an
 //! uninterrupted run. Every piece of that state is checked before it is used: a damaged or
 //! foreign state is an error, and frames changed since they were written are rendered again.
@@ -31,11 +38,11 @@
 //! in the exemplar's colors, with its own checkpoints) and one per file ([`composite()`]:
 //! recoloring and compositing the painted layers into frames and a GIF) — which a job
 //! scheduler can run on many machines. All three give the same bytes: the painted layer
-//! passes through the same 16-bit quantization ([`paint`]) whether it stays in memory or is
+//! passes through the same 16-bit quantization (to 16-bit PNG) whether it stays in memory or is
 //! written to disk in between.
 
 use crate::anim::{Animation, RegionFrame};
-use crate::composite::{self, Background, LayerFrame, Pigment, Recolor, StrokeMode, StylizedLayer};
+use crate::composite::{self, LayerFrame, Pigment, StylizedLayer};
 use crate::error::{Error, Result};
 use crate::eval;
 use crate::exemplar::{self, Exemplar};
@@ -51,47 +58,52 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 mod batch;
+mod builder;
 mod jobs;
-pub mod keys;
-pub mod paint;
+pub(crate) mod keys;
+pub(crate) mod paint;
+mod style;
 
-pub use batch::{StyleCache, render_batch};
+pub use crate::composite::{Recolor, StrokeMode};
+pub(crate) use batch::StyleCache;
+pub use batch::render_batch;
+pub use builder::Render;
 pub use jobs::{LAYER_MANIFEST, LayerCost, LayerJobSummary, composite, layer_costs, render_layer};
+pub use style::{Background, NO_STYLE, Style};
 
 /// The style a layer painted from keyframes is reported with.
 pub const KEYFRAMES_STYLE: &str = "keyframes";
 
-/// The style name that leaves a layer flat.
-pub const NO_STYLE: &str = "none";
-
-/// What to render and how.
+/// What to render and how: the lower layer under [`Render`], which the command line uses.
+/// Start from [`RenderOptions::new`] and set the fields.
 #[derive(Clone, Debug)]
+#[non_exhaustive]
 pub struct RenderOptions {
     /// Directory of the PNG frames (`NNNN.png`, numbered by animation frame, 0001 = the first).
     pub out_dir: PathBuf,
     /// Also write an animated GIF here.
     pub gif: Option<PathBuf>,
-    /// Per-layer styles: a layer name or 1-based index, and an exemplar name or folder, or
-    /// [`NO_STYLE`] to leave the layer flat.
-    pub styles: Vec<(String, String)>,
-    /// The style of every other layer. Default: the bundled default exemplar.
-    pub default_style: Option<String>,
+    /// Per-layer styles: a layer name or 1-based index ([`Animation::find_region`]), and its
+    /// style. The last one naming a layer wins.
+    pub styles: Vec<(String, Style)>,
+    /// The style of every other layer. Default (`None`): the bundled default exemplar
+    /// ([`exemplar::DEFAULT`]).
+    pub default_style: Option<Style>,
     /// Extra folders to look up exemplars by name.
     pub exemplar_dirs: Vec<PathBuf>,
-    /// `none`/`transparent`, a color (`#rrggbb`, `white` …) or an image file; `None` = the
-    /// animation's own background (white when it has none).
-    pub background: Option<String>,
+    /// What the layers are composited over. Default: the animation's own background (white
+    /// when it has none).
+    pub background: Background,
     /// How stylized layers are recolored.
     pub recolor: Recolor,
     /// What happens to strokes.
     pub strokes: StrokeMode,
     /// Frames to render (0-based); guides are computed over this range only.
     pub frames: Range<usize>,
-    /// Engine parameters.
+    /// Engine parameters. At an animation's [`Animation::scale`] other than 1, the exemplar's
+    /// scale, the blur and the modulation bounds are scaled alike, so that a preview looks like
+    /// the full render.
     pub params: Params,
-    /// The canvas scale the animation was loaded with (`--scale`); exemplars, blur and
-    /// modulation bounds are scaled alike so a preview looks like the full render.
-    pub scale: f32,
     /// Also write each layer under `OUT_DIR/layers/NN_slug/`.
     pub keep_layers: bool,
     /// Continue an interrupted render in `out_dir`.
@@ -99,9 +111,10 @@ pub struct RenderOptions {
     /// Measure every stylized layer against its exemplar afterwards ([`eval`]).
     pub eval: bool,
     /// Painted keyframes: (animation frame, 0-based; the painting's file), each painting the
-    /// canvas's size (or the animation's unscaled size, resized along with [`Self::scale`]).
+    /// canvas's size (or the animation's unscaled size, resized along with
+    /// [`Animation::scale`]).
     /// The layers a painting paints are painted from the paintings in every frame, the others
-    /// keep their style (module [`keys`]).
+    /// keep their style.
     pub keyframes: Vec<(usize, PathBuf)>,
 }
 
@@ -114,12 +127,11 @@ impl RenderOptions {
             styles: Vec::new(),
             default_style: None,
             exemplar_dirs: Vec::new(),
-            background: None,
+            background: Background::Animation,
             recolor: Recolor::Glaze,
             strokes: StrokeMode::Keep,
             frames,
             params: Params::default(),
-            scale: 1.0,
             keep_layers: false,
             resume: false,
             eval: false,
@@ -168,7 +180,7 @@ impl RenderSummary {
 }
 
 /// One exemplar prepared for this render.
-struct Style {
+struct Prepped {
     name: String,
     exemplar: Exemplar,
     source: Source,
@@ -199,15 +211,31 @@ fn target_fill(rf: &RegionFrame, strokes: StrokeMode) -> Plane<Rgba> {
     }
 }
 
-/// Resolves every region's style: explicit `styles` first, then the default.
+/// The style of layers without one of their own.
+fn default_style(opts: &RenderOptions) -> Style {
+    opts.default_style.clone().unwrap_or_else(|| Style::named(exemplar::DEFAULT))
+}
+
+/// Resolves every region's style, as its key ([`Style::key`], `None`: left flat): explicit
+/// `styles` first, then the default.
 fn resolve_styles(anim: &Animation, opts: &RenderOptions) -> Result<Vec<Option<String>>> {
-    let default = opts.default_style.clone().unwrap_or_else(|| exemplar::DEFAULT.to_string());
-    let mut out: Vec<Option<String>> = vec![if default == NO_STYLE { None } else { Some(default) }; anim.regions.len()];
+    let mut out: Vec<Option<String>> = vec![default_style(opts).key(); anim.regions.len()];
     for (key, style) in &opts.styles {
         let i = anim.find_region(key)?;
-        out[i] = if style == NO_STYLE { None } else { Some(style.clone()) };
+        out[i] = style.key();
     }
     Ok(out)
+}
+
+/// The style of `opts` whose key is `key`.
+fn style_of_key(opts: &RenderOptions, key: &str) -> Style {
+    opts.styles
+        .iter()
+        .rev()
+        .map(|(_, s)| s.clone())
+        .chain([default_style(opts)])
+        .find(|s| s.key().as_deref() == Some(key))
+        .unwrap_or_else(|| Style::named(key))
 }
 
 /// Parameters for one exemplar at the render's scale.
@@ -260,11 +288,8 @@ fn frame_range(anim: &Animation, opts: &RenderOptions) -> Result<Range<usize>> {
     Ok(range)
 }
 
-fn background(anim: &Animation, opts: &RenderOptions) -> Result<Background> {
-    match &opts.background {
-        None => Ok(Background::from_animation(anim.background.as_ref())),
-        Some(spec) => Background::parse(spec, anim.width as usize, anim.height as usize),
-    }
+fn background(anim: &Animation, opts: &RenderOptions) -> Result<composite::Background> {
+    opts.background.resolve(anim)
 }
 
 /// The styles of one file's regions, resolved and prepared.
@@ -273,7 +298,7 @@ struct Prepared {
     styles_of: Vec<Option<String>>,
     /// Per region, its entry in `styles` (`None`: flat, or not prepared).
     region_style: Vec<Option<usize>>,
-    styles: Vec<Style>,
+    styles: Vec<Prepped>,
 }
 
 /// Resolves the style of every region and prepares the exemplars of the stylized ones (only
@@ -310,10 +335,9 @@ fn prepare(
         styles_of.iter().enumerate().filter(|(r, _)| wanted(*r)).filter_map(|(_, s)| s.clone()).collect();
     names.sort();
     names.dedup();
-    let exemplars: Vec<Exemplar> =
-        names.iter().map(|n| cache.exemplar(n, &opts.exemplar_dirs)).collect::<Result<_>>()?;
+    let exemplars: Vec<Exemplar> = names.iter().map(|n| cache.exemplar(n, opts)).collect::<Result<_>>()?;
     let base: Vec<Params> =
-        exemplars.iter().map(|ex| style_params(&opts.params, ex, opts.scale)).collect::<Result<_>>()?;
+        exemplars.iter().map(|ex| style_params(&opts.params, ex, anim.scale())).collect::<Result<_>>()?;
     // Per layer: its exemplar and the parameters fitted to its thickness (thin layers get a
     // smaller blur σ and border width b, see `Params::fit_to_thickness`).
     let fitted: Vec<Option<(usize, Params)>> = (0..anim.regions.len())
@@ -349,13 +373,17 @@ fn prepare(
             })
         })
         .collect();
-    let styles: Vec<Style> = keys
+    let styles: Vec<Prepped> = keys
         .into_iter()
         .map(|(e, params)| {
             let ex = exemplars[e].clone();
             let source = cache.source(&names[e], &ex, &params, &opts.exemplar_dirs)?;
             let pigment = Pigment::from_exemplar(&ex);
-            Ok(Style { name: names[e].clone(), exemplar: ex, source, pigment, params })
+            let name = match style_of_key(opts, &names[e]) {
+                Style::Exemplar(ex) => ex.meta.name.clone(),
+                _ => names[e].clone(),
+            };
+            Ok(Prepped { name, exemplar: ex, source, pigment, params })
         })
         .collect::<Result<_>>()?;
     Ok(Prepared { styles_of, region_style, styles })
@@ -380,7 +408,7 @@ fn recolor_paint(
 fn write_composite(
     anim: &Animation,
     opts: &RenderOptions,
-    background: &Background,
+    background: &composite::Background,
     frame: usize,
     results: &[(Option<StylizedLayer>, RegionFrame)],
     layer_dirs: &[PathBuf],
@@ -448,11 +476,11 @@ fn write_gif(
     anim: &Animation,
     opts: &RenderOptions,
     range: &Range<usize>,
-    background: &Background,
+    background: &composite::Background,
     progress: &dyn Progress,
 ) -> Result<()> {
     let Some(gif) = &opts.gif else { return Ok(()) };
-    let transparent = matches!(background, Background::Transparent);
+    let transparent = matches!(background, composite::Background::Transparent);
     let options = GifOptions { transparent, ..GifOptions::new(anim.fps) };
     let mut writer = GifWriter::create(gif, anim.width as usize, anim.height as usize, options)?;
     for frame in range.clone() {
@@ -473,7 +501,7 @@ fn stage_name(anim: &Animation, region: usize) -> String {
 }
 
 /// [`render`] with exemplars and prepared sources shared through `cache` (as in a batch).
-pub fn render_with(
+pub(crate) fn render_with(
     anim: &Animation,
     opts: &RenderOptions,
     cache: &StyleCache,
@@ -579,9 +607,9 @@ fn render_fingerprint(anim: &Animation, opts: &RenderOptions, range: &Range<usiz
         p.styles_of,
         opts.recolor,
         opts.strokes,
-        opts.background,
+        opts.background.fingerprint_spec(),
         opts.params,
-        opts.scale,
+        anim.scale(),
         w * 100_000 + h,
         p.styles.iter().map(|s| s.source.frames()).collect::<Vec<_>>(),
         opts.keep_layers,
@@ -634,7 +662,7 @@ fn start_layers(
 fn paint_layer(
     anim: &Animation,
     opts: &RenderOptions,
-    styles: &[Style],
+    styles: &[Prepped],
     l: &mut Layer,
     rf: &RegionFrame,
     frame: usize,
@@ -665,7 +693,7 @@ fn paint_layer(
 fn summarize(
     anim: &Animation,
     opts: &RenderOptions,
-    styles: &[Style],
+    styles: &[Prepped],
     layers: &[Layer],
     keyed: &[Option<keys::KeyedFrames>],
 ) -> Result<Vec<LayerSummary>> {
@@ -698,7 +726,7 @@ fn start_layer(
     opts: &RenderOptions,
     region: usize,
     range: &Range<usize>,
-    style: &Style,
+    style: &Prepped,
 ) -> Result<(Synthesizer, GuideStream)> {
     let (first, strokes) = (range.start, opts.strokes);
     crate::synth::start(
@@ -723,7 +751,7 @@ fn next_frame(
     synth.step(&g)
 }
 
-fn evaluate_layer(l: &Layer, style: &Style, w: usize, h: usize) -> Result<eval::Report> {
+fn evaluate_layer(l: &Layer, style: &Prepped, w: usize, h: usize) -> Result<eval::Report> {
     let unorm = |v: u8| v as f32 / 255.0;
     let frames: Vec<Plane<Rgba>> = l
         .kept

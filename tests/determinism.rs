@@ -22,13 +22,12 @@ fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
 #[test]
 fn byte_identical_output_at_1_2_3_8_and_16_threads() {
     let demo = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/demo/waving.json");
-    let a = anim::load(&demo, &LoadOptions { scale: 0.5, ..Default::default() }).unwrap();
+    let a = anim::load(&demo, &LoadOptions::default().scale(0.5)).unwrap();
     let root = std::env::temp_dir().join(format!("fm-threads-{}", std::process::id()));
     let run = |threads: usize| {
         let out = root.join(threads.to_string());
         let mut opts = RenderOptions::new(out.clone(), 0..3);
         opts.params = Params::builder().seed(7).build().unwrap();
-        opts.scale = 0.5;
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| render::render(&a, &opts, &NoProgress)).unwrap();
         files(&out)
@@ -59,11 +58,10 @@ fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
 fn engine_output_is_pinned() {
     const PINNED: u64 = 0x7dbb_b162_973c_a22b;
     let demo = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/demo/waving.json");
-    let a = anim::load(&demo, &LoadOptions { scale: 0.5, ..Default::default() }).unwrap();
+    let a = anim::load(&demo, &LoadOptions::default().scale(0.5)).unwrap();
     let out = std::env::temp_dir().join(format!("fm-pinned-{}", std::process::id()));
     let mut opts = RenderOptions::new(out.clone(), 0..4);
     opts.params = Params::builder().seed(7).build().unwrap();
-    opts.scale = 0.5;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
     pool.install(|| render::render(&a, &opts, &NoProgress)).unwrap();
     let mut pixels = Vec::new();

@@ -3,7 +3,7 @@
 
 use fluidymation::exemplar::border::estimate_border_width;
 use fluidymation::exemplar::generate::{GeneratorParams, generate};
-use fluidymation::exemplar::{self, Exemplar, Location, SearchPath, Source};
+use fluidymation::exemplar::{self, Exemplar, Location, Origin, SearchPath};
 use fluidymation::{Error, NoProgress};
 use std::path::{Path, PathBuf};
 
@@ -109,7 +109,7 @@ fn find_by_path_and_by_name_in_order() {
     small("same").save(&a.join("same"), false).unwrap();
     small("other").save(&b.join("same"), false).unwrap();
     small("only-b").save(&b.join("only-b"), false).unwrap();
-    let sp = SearchPath::new().dir(&a, Source::Argument).dir(&b, Source::Environment);
+    let sp = SearchPath::new().dir(&a, Origin::Argument).dir(&b, Origin::Environment);
     assert_eq!(exemplar::find("same", &sp).unwrap().dir.unwrap(), a.join("same"));
     assert_eq!(exemplar::find("only-b", &sp).unwrap().meta.name, "only-b");
     let by_path = b.join("same");
@@ -125,7 +125,7 @@ fn find_by_path_and_by_name_in_order() {
     assert_eq!(all.len(), 3);
     assert!(all.iter().any(|i| i.name == "same"
         && i.shadowed
-        && i.location == Location::Folder(b.join("same"), Some(Source::Environment))));
+        && i.location == Location::Folder(b.join("same"), Some(Origin::Environment))));
     assert!(all.iter().all(|i| i.size == (48, 40) && i.frames == 4));
     std::fs::remove_dir_all(&d).unwrap();
 }

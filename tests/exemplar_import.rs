@@ -13,7 +13,7 @@ fn check(params: GeneratorParams, min_iou: f32) {
     for (i, f) in truth.frames.iter().enumerate() {
         fluidymation::img::save_rgb(&dir.join(format!("shot_{}.png", i + 1)), f).unwrap();
     }
-    let opts = ImportOptions { name: "imported".into(), ..Default::default() };
+    let opts = ImportOptions::default().name("imported");
     let ex = import(&dir, &opts, &NoProgress).unwrap();
     assert_eq!(ex.len(), truth.len());
     let ious: Vec<f32> = ex.masks.iter().zip(&truth.masks).map(|(a, b)| iou(a, b)).collect();
@@ -31,7 +31,7 @@ fn check(params: GeneratorParams, min_iou: f32) {
     let (p, q) = (parse_hex_color(&ex.meta.paper).unwrap(), truth.paper());
     assert!((0..3).all(|i| (p[i] - q[i]).abs() < 0.03), "paper {:?} vs {:?}", p, q);
     // Crop and scale.
-    let opts = ImportOptions { crop: Some([10, 10, 100, 90]), scale: 0.5, ..opts };
+    let opts = opts.crop([10, 10, 100, 90]).scale(0.5);
     let small = import(&dir, &opts, &NoProgress).unwrap();
     assert_eq!((small.width(), small.height()), (50, 45));
     std::fs::remove_dir_all(&dir).unwrap();
@@ -60,10 +60,10 @@ fn import_errors_are_clear() {
     fluidymation::img::save_rgb(&dir.join("a2.png"), &blank).unwrap();
     let e = import(&dir, &ImportOptions::default(), &NoProgress).unwrap_err().to_string();
     assert!(e.contains("a1.png") && e.contains("no paint found"), "{e}");
-    let opts = ImportOptions { crop: Some([30, 30, 20, 20]), ..Default::default() };
+    let opts = ImportOptions::default().crop([30, 30, 20, 20]);
     let e = import(&dir, &opts, &NoProgress).unwrap_err().to_string();
     assert!(e.contains("crop") && e.contains("40x40"), "{e}");
-    let opts = ImportOptions { name: "../evil".into(), ..Default::default() };
+    let opts = ImportOptions::default().name("../evil");
     assert!(import(&dir, &opts, &NoProgress).is_err());
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -24,7 +24,7 @@ fn previews_are_written_and_encode_the_channels() {
     let g = compute_sequence(&seq, &GuideParams { blur_sigma: 2.0, ..Default::default() }).unwrap();
     let dir = std::env::temp_dir().join(format!("fm-guide-preview-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let opts = PreviewOptions { border_width: 5.0, ..Default::default() };
+    let opts = PreviewOptions::default().border_width(5.0);
     let scales = preview::write_previews(&g[6], &dir, 6, &opts).unwrap();
     let flow = img::load_rgb(&dir.join("flow_0006.png")).unwrap();
     let ext_pos = img::load_gray(&dir.join("ext_pos_0006.png")).unwrap();
@@ -74,7 +74,7 @@ fn save_montage(g: &FrameGuides, name: &str, opts: &PreviewOptions) {
 #[ignore]
 fn generate_docs_pictures() {
     let (w, h) = (200, 150);
-    let opts = PreviewOptions { border_width: 8.0, ..Default::default() };
+    let opts = PreviewOptions::default().border_width(8.0);
     // Paint spreading unevenly from a drop: three lobes growing at different speeds.
     let spread: Vec<Plane<f32>> = (0..30)
         .map(|i| {

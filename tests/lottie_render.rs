@@ -238,7 +238,7 @@ fn split_precomps_and_time_remap() {
     // The second use is clipped to its 15-px width: only "a" shows (100 px).
     let f = a.render(1, 0).unwrap();
     assert_eq!(f.fill.data().iter().filter(|c| c[3] > 0.99).count(), 100);
-    let s = anim_of(&d, &LoadOptions { split_precomps: true, ..Default::default() });
+    let s = anim_of(&d, &LoadOptions::default().split_precomps(true));
     let names: Vec<&str> = s.regions.iter().map(|r| r.name.as_str()).collect();
     assert_eq!(names, ["pre/a", "pre/b", "again/a", "again/b"]);
     assert!(s.regions.iter().all(|r| r.kind == RegionKind::PrecompChild));
@@ -250,7 +250,7 @@ fn split_precomps_and_time_remap() {
 #[test]
 fn scale_option_scales_the_canvas() {
     let d = doc(vec![rect_layer("r", 1, 10.0, 10.0, 10.0, 10.0, [1.0; 4])]);
-    let a = anim_of(&d, &LoadOptions { scale: 0.5, ..Default::default() });
+    let a = anim_of(&d, &LoadOptions::default().scale(0.5));
     assert_eq!((a.width, a.height), (20, 20));
     let f = a.render(0, 0).unwrap();
     assert_eq!(f.fill.data().iter().filter(|c| c[3] > 0.99).count(), 25);

@@ -149,7 +149,7 @@ fn smooth_gradients_stay_close_to_the_source() {
         let mut measured = Vec::new();
         for dither in [true, false] {
             let path = dir.join(format!("{name}-{dither}.gif"));
-            let options = GifOptions { dither, ..GifOptions::new(10.0) };
+            let options = GifOptions::new(10.0).dither(dither);
             let mut writer = GifWriter::create(&path, src.width(), src.height(), options).unwrap();
             writer.add_frame(&src).unwrap();
             writer.finish().unwrap();
@@ -246,7 +246,7 @@ fn transparent_frames_are_cleared_between_frames() {
             if (x0..x0 + 10).contains(&x) && (5..15).contains(&y) { [0.2, 0.4, 0.9, 0.9] } else { [0.0; 4] }
         })
     };
-    let options = GifOptions { transparent: true, ..GifOptions::new(10.0) };
+    let options = GifOptions::new(10.0).transparent(true);
     let mut writer = GifWriter::create(&path, w, h, options).unwrap();
     writer.add_frame(&frame(0)).unwrap();
     writer.add_frame(&frame(20)).unwrap();

@@ -85,11 +85,10 @@ fn a_painted_layer_follows_its_painting_and_the_others_keep_their_style() {
     // A preview at half size takes the full-size painting, scaled along.
     let half = anim::load(
         &Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/demo/waving.json"),
-        &anim::LoadOptions { scale: 0.5, ..Default::default() },
+        &anim::LoadOptions::default().scale(0.5),
     )
     .unwrap();
     let mut preview = RenderOptions::new(dir.join("preview"), 22..25);
-    preview.scale = 0.5;
     preview.keyframes = vec![(key, file.clone())];
     let summary = render::render(&half, &preview, &NoProgress).unwrap();
     let dress = summary.layers.iter().find(|l| l.name == "dress").unwrap();

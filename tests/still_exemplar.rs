@@ -31,7 +31,7 @@ fn one_image_is_a_still_exemplar() {
     assert_eq!(still.meta.name, "my-swatch");
     let overlap = import::iou(&still.masks[0], &bundled.masks[0]);
     assert!(overlap > 0.99, "mask IoU with the bundled swatch's {overlap}");
-    let opts = import::ImportOptions { name: "swatch".into(), ..Default::default() };
+    let opts = import::ImportOptions::default().name("swatch");
     let imported = import::import(&path, &opts, &NoProgress).unwrap();
     assert_eq!(imported.len(), 1);
     assert_eq!(imported.masks[0].data(), still.masks[0].data());

@@ -69,7 +69,7 @@ fn groups_are_layers_named_and_tracked_by_name() {
     assert!(strokes.get(5, 2)[3] > 0.4 && strokes.get(5, 5)[3] == 0.0, "ring only");
     assert!(a.render(body, 0).unwrap().strokes.is_none());
     // A glob selects the same files.
-    let g = anim::load(&d.join("frame*.svg"), &LoadOptions { scale: 0.5, ..Default::default() }).unwrap();
+    let g = anim::load(&d.join("frame*.svg"), &LoadOptions::default().scale(0.5)).unwrap();
     assert_eq!((g.width, g.height, g.frames), (20, 20, 10));
 }
 
@@ -113,7 +113,7 @@ fn pattern_tiles_are_bounded_before_drawing() {
     let fr = a.render(0, 0).unwrap();
     assert!(fr.fill.data().iter().any(|c| c[3] > 0.99), "the pattern is drawn");
     // At --scale 4 the same tile is still small.
-    assert!(anim::load(&d, &LoadOptions { scale: 4.0, ..Default::default() }).is_ok());
+    assert!(anim::load(&d, &LoadOptions::default().scale(4.0)).is_ok());
 
     let d = dir("pattern-huge");
     let f = d.join("f1.svg");

@@ -11,7 +11,7 @@
 //!   region unless [`LoadOptions::split_precomps`]); nulls, matte sources, hidden and fully
 //!   transparent helper layers are not regions; the bottom full-canvas solids are the
 //!   [`Background`]. Frame 0 is the composition's `ip`.
-//! - a directory or `dir/*.svg` glob of SVG frames ([`svg`]): regions are the top-level
+//! - a directory or `dir/*.svg` glob of SVG frames: regions are the top-level
 //!   groups, identified across frames by name; shapes outside groups form one `root` region.
 //!   Played at 24 fps.
 //! - a directory of PNG masks: one region, 24 fps.
@@ -28,7 +28,7 @@
 
 pub mod lottie;
 mod masks;
-pub mod svg;
+pub(crate) mod svg;
 
 use crate::error::{Error, Result};
 use crate::img::{Plane, Rgba};
@@ -40,8 +40,9 @@ pub const MAX_SIDE: u32 = 16384;
 /// Largest frame count accepted.
 pub const MAX_FRAMES: usize = 100_000;
 
-/// Options for [`load`].
+/// Options for [`load`]: `LoadOptions::default().scale(0.5)`.
 #[derive(Clone, Debug)]
+#[non_exhaustive]
 pub struct LoadOptions {
     /// Uniform scale applied to the canvas (0.5 = half size previews). Default: 1.
     pub scale: f32,
@@ -53,6 +54,20 @@ pub struct LoadOptions {
 impl Default for LoadOptions {
     fn default() -> Self {
         LoadOptions { scale: 1.0, split_precomps: false }
+    }
+}
+
+impl LoadOptions {
+    /// Sets [`LoadOptions::scale`], in `(0, 16]` (checked by [`load`]). Default: 1.
+    pub fn scale(mut self, scale: f32) -> Self {
+        self.scale = scale;
+        self
+    }
+
+    /// Sets [`LoadOptions::split_precomps`]. Default: false.
+    pub fn split_precomps(mut self, yes: bool) -> Self {
+        self.split_precomps = yes;
+        self
     }
 }
 
@@ -157,7 +172,7 @@ impl RegionFrame {
 }
 
 /// Renders the regions of a loaded animation. Implemented by each input format.
-pub trait RegionRenderer: Send + Sync {
+pub(crate) trait RegionRenderer: Send + Sync {
     /// Renders region number `region` (position in [`Animation::regions`]) at frame `frame`
     /// at the animation's (scaled) size.
     fn render(&self, region: usize, frame: usize) -> Result<RegionFrame>;
@@ -181,6 +196,8 @@ pub struct Animation {
     pub background: Option<Background>,
     /// Problems that concern the whole file.
     pub warnings: Vec<String>,
+    /// The [`LoadOptions::scale`] it was loaded with ([`Animation::scale`]).
+    scale: f32,
     renderer: Box<dyn RegionRenderer>,
 }
 
@@ -192,6 +209,7 @@ impl std::fmt::Debug for Animation {
             .field("height", &self.height)
             .field("fps", &self.fps)
             .field("frames", &self.frames)
+            .field("scale", &self.scale)
             .field("regions", &self.regions)
             .field("background", &self.background)
             .finish_non_exhaustive()
@@ -199,9 +217,10 @@ impl std::fmt::Debug for Animation {
 }
 
 impl Animation {
-    /// Assembles an animation from its parts (used by the format readers).
+    /// Assembles an animation from its parts (used by the format readers), at scale 1 until
+    /// [`load`] sets the scale it was loaded with.
     #[allow(clippy::too_many_arguments)]
-    pub fn new(
+    pub(crate) fn new(
         path: PathBuf,
         width: u32,
         height: u32,
@@ -212,7 +231,14 @@ impl Animation {
         warnings: Vec<String>,
         renderer: Box<dyn RegionRenderer>,
     ) -> Self {
-        Animation { path, width, height, fps, frames, regions, background, warnings, renderer }
+        Animation { path, width, height, fps, frames, regions, background, warnings, scale: 1.0, renderer }
+    }
+
+    /// The scale the canvas was loaded at ([`LoadOptions::scale`]; 0.5 = a half-size preview).
+    /// A render reads it from here to scale the paint texture along with the canvas, so that a
+    /// preview looks like the full render.
+    pub fn scale(&self) -> f32 {
+        self.scale
     }
 
     /// Renders region number `region` (position in [`Animation::regions`]) at `frame`.
@@ -257,7 +283,7 @@ impl Animation {
 
 /// Area-weighted color histogram (5 bits per channel) for a region's dominant color.
 #[derive(Clone, Debug, Default)]
-pub struct ColorHistogram {
+pub(crate) struct ColorHistogram {
     bins: std::collections::HashMap<u16, (f64, [f64; 3])>,
 }
 
@@ -311,6 +337,13 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Animation> {
     if !(options.scale > 0.0 && options.scale <= 16.0) {
         return Err(Error::param("scale", options.scale, "a number in (0, 16]"));
     }
+    let mut animation = read(path, options)?;
+    animation.scale = options.scale;
+    Ok(animation)
+}
+
+/// [`load`] by the input's format.
+fn read(path: &Path, options: &LoadOptions) -> Result<Animation> {
     let is_dir = path.is_dir();
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
     if is_dir || crate::seq::is_glob(path) {

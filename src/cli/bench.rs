@@ -2,10 +2,10 @@
 
 use super::Ctx;
 use super::params::{ExemplarDirs, SynthFlags, Threads};
+use super::workload;
 use anyhow::{Context, Result};
 use fluidymation::guide::GuideStream;
 use fluidymation::synth::{Source, StageTimes, Synthesizer};
-use fluidymation::workload;
 use std::time::{Duration, Instant};
 
 /// Arguments of `bench`.

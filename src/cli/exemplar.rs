@@ -4,7 +4,7 @@ use super::Ctx;
 use anyhow::{Context, bail};
 use fluidymation::exemplar::generate::{self, GeneratorParams, Pigment};
 use fluidymation::exemplar::import::{self, ImportOptions};
-use fluidymation::exemplar::{self, Exemplar, SearchPath, Source};
+use fluidymation::exemplar::{self, Exemplar, Origin, SearchPath};
 use fluidymation::progress::{NoProgress, Progress};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -280,7 +280,7 @@ fn target_dir(output: Option<PathBuf>, name: &str, force: bool, search: &SearchP
     let parent = match output {
         Some(o) => o,
         None => search
-            .first(Source::User)
+            .first(Origin::User)
             .map(Path::to_path_buf)
             .context("no user exemplar folder (HOME is not set); pass -o DIR")?,
     };
@@ -377,16 +377,14 @@ fn generate(a: GenerateArgs, search: &SearchPath, ctx: &Ctx) -> anyhow::Result<(
 
 fn import(a: ImportArgs, search: &SearchPath, ctx: &Ctx) -> anyhow::Result<()> {
     let dir = target_dir(a.output, &a.name, a.force, search)?;
-    let opts = ImportOptions {
-        name: a.name.clone(),
-        crop: a.crop,
-        scale: a.scale,
-        fps: a.fps,
-        threshold: a.threshold,
-        min_area: None,
-        description: a.description,
-        license: a.license,
-    };
+    let mut opts = ImportOptions::default()
+        .name(a.name.clone())
+        .scale(a.scale)
+        .fps(a.fps)
+        .description(a.description)
+        .license(a.license);
+    opts.crop = a.crop;
+    opts.threshold = a.threshold;
     let ex = {
         let bar = Bar::new(ctx);
         import::import(&a.src, &opts, bar.progress())

@@ -172,7 +172,7 @@ fn write_guides(a: &Animation, range: &Range<usize>, dir: &std::path::Path, ctx:
 
 /// Runs `inspect`.
 pub fn run(args: Args, ctx: &Ctx) -> anyhow::Result<()> {
-    let opts = LoadOptions { scale: args.scale, split_precomps: args.split_precomps };
+    let opts = LoadOptions::default().scale(args.scale).split_precomps(args.split_precomps);
     let a = anim::load(&args.input, &opts).with_context(|| format!("could not load '{}'", args.input.display()))?;
     let range = super::params::parse_frames(args.frames.as_deref(), a.frames)?;
     super::params::warn_if_clipped(args.frames.as_deref(), &range, a.frames, "the input");

@@ -11,6 +11,7 @@ pub mod progress;
 pub mod quality;
 pub mod render;
 pub mod synth;
+pub mod workload;
 
 use std::io::Write;
 use std::process::ExitCode;

@@ -186,7 +186,7 @@ fn add_file(
         common.push("--split-precomps".into());
     }
     let mut extra_inputs = Vec::new();
-    if let Some(bg) = &opts.background {
+    if let Some(bg) = &args.background {
         let p = Path::new(bg);
         let spec = if p.is_file() {
             let abs = text(&absolute(p)?);

@@ -6,8 +6,7 @@ use super::params::{ExemplarDirs, SynthFlags, Threads, parse_frames, parse_keyfr
 use super::progress::{Bars, handle_interrupts};
 use anyhow::{Context, Result, bail};
 use fluidymation::anim::{self, Animation, LoadOptions};
-use fluidymation::composite::{Recolor, StrokeMode};
-use fluidymation::render::{self, RenderOptions, RenderSummary};
+use fluidymation::render::{self, Recolor, RenderOptions, RenderSummary, StrokeMode, Style};
 use fluidymation::{Error, Progress};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -244,7 +243,7 @@ pub fn output_layout(
 
 /// Loads one input with the scale and precomp options, printing its warnings.
 pub fn load_input(input: &Path, args: &RenderArgs) -> Result<Animation> {
-    let load = LoadOptions { scale: args.scale, split_precomps: args.split_precomps };
+    let load = LoadOptions::default().scale(args.scale).split_precomps(args.split_precomps);
     let anim = anim::load(input, &load).with_context(|| format!("could not load '{}'", input.display()))?;
     for w in &anim.warnings {
         log::warn!("{}: {}", input.display(), w);
@@ -306,44 +305,46 @@ pub fn file_options(
     let frames = parse_frames(args.frames.as_deref(), anim.frames)?;
     warn_if_clipped(args.frames.as_deref(), &frames, anim.frames, &format!("'{}'", input.display()));
     let mut opts = RenderOptions::new(out_dir, frames);
+    let style = |name: &str| -> Style { name.parse().unwrap_or_else(|never| match never {}) };
     if let Some(s) = styles {
-        opts.default_style = s.default.clone();
-        opts.styles.extend(s.layers.iter().filter(|(layer, _)| anim.find_region(layer).is_ok()).cloned());
+        opts.default_style = s.default.as_deref().map(style);
+        opts.styles.extend(
+            s.layers.iter().filter(|(layer, _)| anim.find_region(layer).is_ok()).map(|(l, ex)| (l.clone(), style(ex))),
+        );
         if let Some(file) = s.file(input) {
-            if file.default.is_some() {
-                opts.default_style = file.default.clone();
+            if let Some(d) = &file.default {
+                opts.default_style = Some(style(d));
             }
             for (layer, ex) in &file.layers {
                 anim.find_region(layer).with_context(|| {
                     format!("in the styles file '{}', [files.\"{}\".layers]", s.path.display(), file.key)
                 })?;
-                opts.styles.push((layer.clone(), ex.clone()));
+                opts.styles.push((layer.clone(), style(ex)));
             }
         }
     }
     if let Some(e) = &args.exemplar {
-        opts.default_style = Some(e.clone());
+        opts.default_style = Some(style(e));
     }
     for (layer, ex) in style_flags(args)? {
         if anim.find_region(&layer).is_ok() {
-            opts.styles.push((layer, ex));
+            opts.styles.push((layer, style(&ex)));
         }
     }
     opts.gif = gif;
     opts.exemplar_dirs = args.exemplar_dir.dirs.clone();
-    opts.background = args.background.clone();
+    if let Some(spec) = &args.background {
+        opts.background = spec.parse()?;
+    }
     // Mask sequences are white on nothing: glazed in their own color they would not show.
     let masks_only = anim.regions.iter().all(|r| r.kind == anim::RegionKind::MaskSequence);
     opts.recolor = args.recolor.unwrap_or(if masks_only { Recolor::None } else { Recolor::Glaze });
     if opts.recolor == Recolor::Glaze {
-        let paper = match args.background.as_deref() {
-            None => Some(anim.background.as_ref().map(|b| b.color).unwrap_or([1.0; 4])),
-            Some(spec) => fluidymation::composite::parse_color(spec),
-        };
+        let paper = opts.background.color(anim);
         for (i, r) in anim.regions.iter().enumerate() {
             // The last --style naming the layer wins, else the default.
             let style = opts.styles.iter().rev().find(|(k, _)| anim.find_region(k).ok() == Some(i)).map(|(_, e)| e);
-            let flat = style.or(opts.default_style.as_ref()).is_some_and(|e| e == render::NO_STYLE);
+            let flat = style.or(opts.default_style.as_ref()).is_some_and(|e| *e == Style::None);
             if let Some(p) = paper
                 && !flat
                 && (0..3).all(|i| (r.color[i] - p[i]).abs() < 0.02)
@@ -358,7 +359,6 @@ pub fn file_options(
     }
     opts.strokes = args.strokes;
     opts.params = args.flags.params()?;
-    opts.scale = args.scale;
     opts.keep_layers = args.keep_layers;
     Ok(opts)
 }

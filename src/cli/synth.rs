@@ -51,7 +51,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     args.threads.apply()?;
     let t0 = Instant::now();
     let params = args.flags.params()?;
-    let anim = anim::load(&args.masks, &LoadOptions { scale: args.flags.target_scale()?, ..Default::default() })
+    let anim = anim::load(&args.masks, &LoadOptions::default().scale(args.flags.target_scale()?))
         .with_context(|| format!("could not read the masks in '{}'", args.masks.display()))?;
     if !args.keyframe.is_empty() {
         if let Some(e) = &args.exemplar {

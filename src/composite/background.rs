@@ -1,6 +1,5 @@
 //! What the layers are composited over.
 
-use super::color::parse_color;
 use crate::error::{Error, Result};
 use crate::img::{self, Plane, Rgba};
 use std::path::Path;
@@ -50,30 +49,6 @@ impl Background {
             return Err(fail("the image has no pixels".to_string()));
         }
         Ok(Background::Image(cover(&src, width, height)))
-    }
-
-    /// Parses a `--background` value: `none` or `transparent`, a color ([`parse_color`]:
-    /// `#rrggbb`, `#rgb`, `#rrggbbaa`, `white`, …), or else the path of an image file
-    /// ([`Background::load_image`]). A value that is neither a color nor an existing file is
-    /// an [`Error::InvalidParam`] listing the accepted forms.
-    pub fn parse(spec: &str, width: usize, height: usize) -> Result<Background> {
-        let trimmed = spec.trim();
-        if trimmed.eq_ignore_ascii_case("none") || trimmed.eq_ignore_ascii_case("transparent") {
-            return Ok(Background::Transparent);
-        }
-        if let Some(c) = parse_color(trimmed) {
-            return Ok(Background::Color(c));
-        }
-        let path = Path::new(spec);
-        if !path.exists() {
-            return Err(Error::param(
-                "background",
-                spec,
-                "a color (#rrggbb, #rgb, #rrggbbaa, white, black, …), 'none', or an existing image file \
-                 (no file of that name was found)",
-            ));
-        }
-        Background::load_image(path, width, height)
     }
 
     /// The straight sRGB RGBA background at `(x, y)`.

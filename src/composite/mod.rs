@@ -10,17 +10,19 @@
 //!
 //! # Pipeline
 //!
-//! ```no_run
-//! use fluidymation::composite::{self, Background, LayerFrame, Pigment, Recolor, StrokeMode};
-//! # fn frames() -> (fluidymation::img::Plane<[f32; 3]>, fluidymation::img::Mask,
-//! #     fluidymation::anim::RegionFrame, fluidymation::exemplar::Exemplar) { unimplemented!() }
+//! (Crate-private, so not a doc test; `render` does this for every frame.)
+//!
+//! ```ignore
+//! use crate::composite::{self, Background, LayerFrame, Pigment, Recolor, StrokeMode};
+//! # fn frames() -> (crate::img::Plane<[f32; 3]>, crate::img::Mask,
+//! #     crate::anim::RegionFrame, crate::exemplar::Exemplar) { unimplemented!() }
 //! let (rgb, mask, region_frame, exemplar) = frames();
 //! let pigment = Pigment::from_exemplar(&exemplar); // once per exemplar
 //! let layer = composite::recolor_with(&rgb, &mask, &region_frame.fill, &pigment, Recolor::Glaze)?;
 //! let layers = [LayerFrame::stylized(&layer, region_frame.strokes.as_ref())]; // bottom to top
 //! let (w, h) = rgb.size();
 //! let frame = composite::composite(w, h, &Background::default(), &layers, StrokeMode::Keep)?;
-//! # Ok::<(), fluidymation::Error>(())
+//! # Ok::<(), crate::Error>(())
 //! ```
 //!
 //! # The glaze, exactly
@@ -71,10 +73,8 @@ mod color;
 mod recolor;
 
 pub use background::{Background, WHITE};
-pub use color::{linear_to_srgb, parse_color, srgb_to_linear};
-pub use recolor::{
-    INTENSITY_FLOOR, MAX_AMOUNT, MIN_REFERENCE_DENSITY, Pigment, StylizedLayer, painted, recolor, recolor_with,
-};
+pub use color::parse_color;
+pub use recolor::{INTENSITY_FLOOR, Pigment, StylizedLayer, painted, recolor_with};
 
 use crate::error::{Error, Result};
 use crate::img::{Plane, Rgb, Rgba};
@@ -373,3 +373,6 @@ fn draw_stylized(layer: &StylizedLayer, y: usize, acc: &mut [[f32; 4]], base: &[
         }
     }
 }
+
+#[cfg(test)]
+mod tests;

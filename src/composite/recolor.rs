@@ -2,7 +2,7 @@
 //! and the layer's own colors.
 
 use super::Recolor;
-use super::color::{fast_ln, ln_linear, rgb_to_linear, rgb_to_srgb, sanitize, srgb_to_linear};
+use super::color::{fast_ln, ln_linear, rgb_to_linear, sanitize, srgb_to_linear};
 use crate::error::{Error, Result};
 use crate::exemplar::Exemplar;
 use crate::img::{Mask, Plane, Rect, Rgb, Rgba, sample_bilinear};
@@ -80,6 +80,7 @@ impl Pigment {
     }
 
     /// The reference density `k` (per channel, linear light).
+    #[cfg(test)] // used by the tests only
     pub fn reference_density(&self) -> [f32; 3] {
         self.reference
     }
@@ -141,23 +142,14 @@ pub struct StylizedLayer {
 }
 
 impl StylizedLayer {
-    /// How the layer is recolored and composited.
-    pub fn mode(&self) -> Recolor {
-        self.mode
-    }
-
     /// `(width, height)`.
     pub fn size(&self) -> (usize, usize) {
         (self.width, self.height)
     }
 
-    /// True when the mask is empty (the layer draws nothing).
-    pub fn is_empty(&self) -> bool {
-        self.bbox[0] >= self.bbox[2]
-    }
-
     /// The pigment amount `a` at `(x, y)` (1 = the reference density), `None` outside the
     /// mask or the image.
+    #[cfg(test)] // used by the tests only
     pub fn amount(&self, x: usize, y: usize) -> Option<f32> {
         self.pixel(x, y).map(|p| p.amount)
     }
@@ -165,10 +157,12 @@ impl StylizedLayer {
     /// The color the layer is painted in at `(x, y)`, sRGB: the tint (the flat rendering,
     /// extended past its coverage) for glaze and over, the exemplar's transmittance (its color
     /// with the paper normalized to white) for [`Recolor::None`]. `None` outside the mask.
+    #[cfg(test)] // used by the tests only
     pub fn tint(&self, x: usize, y: usize) -> Option<Rgb> {
-        self.pixel(x, y).map(|p| rgb_to_srgb(p.color))
+        self.pixel(x, y).map(|p| super::color::rgb_to_srgb(p.color))
     }
 
+    #[cfg(test)] // used by the tests only
     fn pixel(&self, x: usize, y: usize) -> Option<LayerPixel> {
         let [x0, y0, x1, y1] = self.bbox;
         ((x0..x1).contains(&x) && (y0..y1).contains(&y))
@@ -210,6 +204,7 @@ fn check_size(what: &str, found: (usize, usize), expected: (usize, usize)) -> Re
 /// `stylized` is the engine's output in the exemplar's colors, `mask` the synthesized region,
 /// `flat` the layer's flat rendering (its own colors; alpha = coverage), `paper` the exemplar's
 /// paper color. All three images must have the same size.
+#[cfg(test)] // used by the tests only
 pub fn recolor(
     stylized: &Plane<Rgb>,
     mask: &Mask,

@@ -24,8 +24,9 @@ use crate::img::{self, Plane, Rgb};
 use crate::progress::Progress;
 use std::path::{Path, PathBuf};
 
-/// Options of [`import`].
+/// Options of [`import`]: `ImportOptions::default().name("swatch").scale(0.5)`.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct ImportOptions {
     /// The exemplar's name. Default: `imported`.
     pub name: String,
@@ -58,6 +59,56 @@ impl Default for ImportOptions {
             description: String::new(),
             license: "unknown".into(),
         }
+    }
+}
+
+impl ImportOptions {
+    /// Sets [`ImportOptions::name`]. Default: `imported`.
+    pub fn name(mut self, name: impl Into<String>) -> Self {
+        self.name = name.into();
+        self
+    }
+
+    /// Sets [`ImportOptions::crop`], `[x, y, width, height]`. Default: none.
+    pub fn crop(mut self, rect: [usize; 4]) -> Self {
+        self.crop = Some(rect);
+        self
+    }
+
+    /// Sets [`ImportOptions::scale`]. Default: 1.
+    pub fn scale(mut self, scale: f32) -> Self {
+        self.scale = scale;
+        self
+    }
+
+    /// Sets [`ImportOptions::fps`]. Default: 24.
+    pub fn fps(mut self, fps: f32) -> Self {
+        self.fps = fps;
+        self
+    }
+
+    /// Sets [`ImportOptions::threshold`]. Default: automatic.
+    pub fn threshold(mut self, threshold: f32) -> Self {
+        self.threshold = Some(threshold);
+        self
+    }
+
+    /// Sets [`ImportOptions::min_area`]. Default: 0.05 % of the frame area, at least 12 px.
+    pub fn min_area(mut self, pixels: usize) -> Self {
+        self.min_area = Some(pixels);
+        self
+    }
+
+    /// Sets [`ImportOptions::description`]. Default: one is made up.
+    pub fn description(mut self, text: impl Into<String>) -> Self {
+        self.description = text.into();
+        self
+    }
+
+    /// Sets [`ImportOptions::license`]. Default: `unknown`.
+    pub fn license(mut self, license: impl Into<String>) -> Self {
+        self.license = license.into();
+        self
     }
 }
 

@@ -28,7 +28,7 @@ pub mod import;
 mod search;
 mod sheet;
 
-pub use search::{DEFAULT, ENV_VAR, ExemplarInfo, Location, SearchPath, Source, find, list, user_dir, validate_name};
+pub use search::{DEFAULT, ENV_VAR, ExemplarInfo, Location, Origin, SearchPath, find, list, user_dir, validate_name};
 pub use sheet::contact_sheet;
 
 use crate::error::{Error, Result};

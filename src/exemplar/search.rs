@@ -21,9 +21,9 @@ pub const DEFAULT: &str = "blue-bloom";
 /// The environment variable listing extra exemplar folders.
 pub const ENV_VAR: &str = "FLUIDYMATION_EXEMPLARS";
 
-/// Why a folder is in the search path.
+/// Why a folder is in the search path (where it came from).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Source {
+pub enum Origin {
     /// Given on the command line (`--exemplar-dir`).
     Argument,
     /// Listed in `FLUIDYMATION_EXEMPLARS`.
@@ -32,12 +32,12 @@ pub enum Source {
     User,
 }
 
-impl Source {
+impl Origin {
     fn label(self) -> &'static str {
         match self {
-            Source::Argument => "--exemplar-dir",
-            Source::Environment => ENV_VAR,
-            Source::User => "user folder",
+            Origin::Argument => "--exemplar-dir",
+            Origin::Environment => ENV_VAR,
+            Origin::User => "user folder",
         }
     }
 }
@@ -46,7 +46,7 @@ impl Source {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Location {
     /// A folder on disk (the exemplar's own folder), and why it was searched.
-    Folder(PathBuf, Option<Source>),
+    Folder(PathBuf, Option<Origin>),
     /// Embedded in the binary.
     Bundled,
 }
@@ -66,7 +66,7 @@ impl fmt::Display for Location {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SearchPath {
     /// Folders searched in order, each with the reason it is searched.
-    pub dirs: Vec<(PathBuf, Source)>,
+    pub dirs: Vec<(PathBuf, Origin)>,
     /// Whether the bundled set is searched last.
     pub bundled: bool,
 }
@@ -82,21 +82,21 @@ impl SearchPath {
     pub fn standard(extra: &[PathBuf]) -> Self {
         let mut sp = SearchPath::new();
         for d in extra {
-            sp = sp.dir(d.clone(), Source::Argument);
+            sp = sp.dir(d.clone(), Origin::Argument);
         }
         if let Some(v) = std::env::var_os(ENV_VAR) {
             for d in std::env::split_paths(&v).filter(|d| !d.as_os_str().is_empty()) {
-                sp = sp.dir(d, Source::Environment);
+                sp = sp.dir(d, Origin::Environment);
             }
         }
         if let Some(d) = user_dir() {
-            sp = sp.dir(d, Source::User);
+            sp = sp.dir(d, Origin::User);
         }
         sp.with_bundled(true)
     }
 
     /// Appends a folder.
-    pub fn dir(mut self, dir: impl Into<PathBuf>, source: Source) -> Self {
+    pub fn dir(mut self, dir: impl Into<PathBuf>, source: Origin) -> Self {
         self.dirs.push((dir.into(), source));
         self
     }
@@ -108,7 +108,7 @@ impl SearchPath {
     }
 
     /// The first folder of the given kind, e.g. where `exemplar generate` writes by default.
-    pub fn first(&self, source: Source) -> Option<&Path> {
+    pub fn first(&self, source: Origin) -> Option<&Path> {
         self.dirs.iter().find(|(_, s)| *s == source).map(|(d, _)| d.as_path())
     }
 }

@@ -17,8 +17,9 @@ use crate::img::{Plane, Rgb, save_gray, save_rgb};
 use glam::Vec2;
 use std::path::Path;
 
-/// How the previews are drawn.
+/// How the previews are drawn: `PreviewOptions::default().border_width(5.0)`.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct PreviewOptions {
     /// Border width `b` of the border channel, pixels. Default: 10 (thesis `--border-width`).
     pub border_width: f32,
@@ -32,6 +33,26 @@ pub struct PreviewOptions {
 impl Default for PreviewOptions {
     fn default() -> Self {
         PreviewOptions { border_width: 10.0, flow_scale: None, ext_scale: None }
+    }
+}
+
+impl PreviewOptions {
+    /// Sets [`PreviewOptions::border_width`]. Default: 10.
+    pub fn border_width(mut self, b: f32) -> Self {
+        self.border_width = b;
+        self
+    }
+
+    /// Sets [`PreviewOptions::flow_scale`]. Default: the frame's largest flow.
+    pub fn flow_scale(mut self, scale: f32) -> Self {
+        self.flow_scale = Some(scale);
+        self
+    }
+
+    /// Sets [`PreviewOptions::ext_scale`]. Default: the frame's largest extent.
+    pub fn ext_scale(mut self, scale: f32) -> Self {
+        self.ext_scale = Some(scale);
+        self
     }
 }
 

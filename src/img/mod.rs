@@ -105,7 +105,7 @@ impl Rect {
 /// Calls `f` with the row-major index of each 4-connected neighbour of pixel `i` in a
 /// `w`-wide, `h`-high image: left, right, up, down (those inside the image).
 #[inline]
-pub fn for_each_neighbour4(i: usize, w: usize, h: usize, mut f: impl FnMut(usize)) {
+pub(crate) fn for_each_neighbour4(i: usize, w: usize, h: usize, mut f: impl FnMut(usize)) {
     let (x, y) = (i % w, i / w);
     if x > 0 {
         f(i - 1);

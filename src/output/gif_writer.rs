@@ -11,8 +11,9 @@ use std::path::{Path, PathBuf};
 /// 1/10 s, so faster animations drop frames instead (see [`gif_schedule`]).
 pub const MIN_DELAY_CS: u64 = 2;
 
-/// Options of a [`GifWriter`].
+/// Options of a [`GifWriter`]: `GifOptions::new(fps).transparent(true)`.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct GifOptions {
     /// Frames per second of the animation. Default: 24.
     pub fps: f64,
@@ -37,6 +38,24 @@ impl GifOptions {
     /// Default options at `fps` frames per second.
     pub fn new(fps: f64) -> Self {
         GifOptions { fps, ..Default::default() }
+    }
+
+    /// Sets [`GifOptions::dither`]. Default: true.
+    pub fn dither(mut self, yes: bool) -> Self {
+        self.dither = yes;
+        self
+    }
+
+    /// Sets [`GifOptions::transparent`]. Default: false.
+    pub fn transparent(mut self, yes: bool) -> Self {
+        self.transparent = yes;
+        self
+    }
+
+    /// Sets [`GifOptions::matte`]. Default: white.
+    pub fn matte(mut self, color: Rgb) -> Self {
+        self.matte = color;
+        self
     }
 }
 

@@ -99,7 +99,7 @@ pub fn prepare_dir(dir: &Path) -> Result<()> {
 /// (`.NAME.PID-SERIAL.tmp` for PNG, GIF and resume-state files, see [`img::atomic_write`]; only
 /// those of the file `only` when given), except those of processes still running. Returns
 /// how many were removed; errors are ignored.
-pub fn remove_stale_temporaries(dir: &Path, only: Option<&str>) -> usize {
+pub(crate) fn remove_stale_temporaries(dir: &Path, only: Option<&str>) -> usize {
     let Ok(entries) = std::fs::read_dir(dir) else { return 0 };
     let own = std::process::id().to_string();
     let proc_fs = Path::new("/proc/self").exists();

@@ -1,10 +1,10 @@
 //! Many files in one run: several at once on the same cores, sharing the exemplars and their
 //! prepared sources; a file that fails does not stop the others.
 
-use super::{RenderOptions, RenderSummary, render_with};
+use super::{RenderOptions, RenderSummary, render_with, style_of_key};
 use crate::anim::Animation;
 use crate::error::Result;
-use crate::exemplar::{self, Exemplar, SearchPath};
+use crate::exemplar::Exemplar;
 use crate::progress::Progress;
 use crate::synth::{Params, Source};
 use std::path::PathBuf;
@@ -24,7 +24,7 @@ type SourceKey = (String, Params);
 /// Use it from threads of your own, not from inside rayon tasks: a file waiting for another
 /// to finish preparing an exemplar blocks its thread.
 #[derive(Default)]
-pub struct StyleCache {
+pub(crate) struct StyleCache {
     exemplars: Mutex<Vec<(String, Slot<Exemplar>)>>,
     sources: Mutex<Vec<(SourceKey, Slot<Source>)>>,
 }
@@ -51,14 +51,18 @@ fn get_or_try<T: Clone>(slot: &Slot<T>, make: impl FnOnce() -> Result<T>) -> Res
 
 impl StyleCache {
     /// An empty cache.
-    pub fn new() -> StyleCache {
+    pub(crate) fn new() -> StyleCache {
         StyleCache::default()
     }
 
-    /// The exemplar `name` (a name or a folder), looked up in `dirs` and the standard places.
-    pub fn exemplar(&self, name: &str, dirs: &[PathBuf]) -> Result<Exemplar> {
+    /// The exemplar of the style of `opts` whose key ([`Style::key`](super::Style::key)) is
+    /// `name`, looked up in [`RenderOptions::exemplar_dirs`] and the standard places.
+    pub fn exemplar(&self, name: &str, opts: &RenderOptions) -> Result<Exemplar> {
+        let dirs = &opts.exemplar_dirs;
         let key = format!("{name}\u{0}{dirs:?}");
-        get_or_try(&slot(&self.exemplars, key), || exemplar::find(name, &SearchPath::standard(dirs)))
+        get_or_try(&slot(&self.exemplars, key), || {
+            style_of_key(opts, name).load(dirs)?.ok_or_else(|| crate::Error::param("style", name, "an exemplar"))
+        })
     }
 
     /// The source of `exemplar` (found as `name` in `dirs`) prepared for `params`.
@@ -70,7 +74,7 @@ impl StyleCache {
 
 /// Renders every `(animation, options, progress)` of `files`, at most `at_once` files at the
 /// same time (each with its layers in parallel on the shared rayon pool), with one
-/// [`StyleCache`]. Returns each file's result in the order given; an error in one file does
+/// cache of exemplars and prepared sources. Returns each file's result in the order given; an error in one file does
 /// not stop the others.
 ///
 /// The output of each file is the same as [`render`](super::render) alone gives.

@@ -120,7 +120,7 @@ fn layer_fingerprint(anim: &Animation, opts: &RenderOptions, input: u64, region:
             opts.exemplar_dirs,
             opts.strokes,
             opts.params,
-            opts.scale,
+            anim.scale(),
             anim.width,
             anim.height,
             anim.frames,
@@ -162,7 +162,7 @@ fn lock(dir: &Path) -> Result<std::fs::File> {
 }
 
 /// Paints region `region` of `anim` (its position in [`Animation::regions`]) as `opts` says,
-/// into `opts.out_dir/layers/NN_name/`: `paint/NNNN.png` ([`Paint`]), checkpoints in
+/// into `opts.out_dir/layers/NN_name/`: `paint/NNNN.png` (16-bit RGBA in the exemplar's colors), checkpoints in
 /// `.fluidymation/` while it runs, [`LAYER_MANIFEST`] when complete, and a `.lock` held while
 /// it runs (a second run of the same job waits for the first). A complete job with the same
 /// options whose painted frames are as it wrote them is not done again; an interrupted one
@@ -323,7 +323,7 @@ fn new_layer(
     opts: &RenderOptions,
     region: usize,
     range: &std::ops::Range<usize>,
-    st: &super::Style,
+    st: &super::Prepped,
     style: Option<usize>,
 ) -> Result<Layer> {
     let (synth, guides) = start_layer(anim, opts, region, range, st)?;
@@ -392,7 +392,7 @@ pub fn composite(anim: &Animation, opts: &RenderOptions, progress: &dyn Progress
                     });
                 }
             }
-            Ok(Some(Pigment::from_exemplar(&cache.exemplar(style, &opts.exemplar_dirs)?)))
+            Ok(Some(Pigment::from_exemplar(&cache.exemplar(style, opts)?)))
         })
         .collect::<Result<_>>()?;
     let layer_dirs = prepare_outputs(anim, opts)?;

@@ -54,8 +54,8 @@ pub(crate) fn painted_regions(
         seen.push(*frame);
         let mut painting = img::load_rgb(path)?;
         // Painted at the animation's own size, rendered with --scale: scaled along.
-        let full = ((w as f32 / opts.scale).round() as usize, (h as f32 / opts.scale).round() as usize);
-        if opts.scale != 1.0 && painting.size() == full {
+        let full = ((w as f32 / anim.scale()).round() as usize, (h as f32 / anim.scale()).round() as usize);
+        if anim.scale() != 1.0 && painting.size() == full {
             painting = img::resize_bilinear(&painting, w, h);
         }
         if painting.size() != (w, h) {

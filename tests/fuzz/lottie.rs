@@ -189,7 +189,7 @@ fn check(dir: &Path) {
     let Ok(model) = lottie::parse(&path, &text) else { return };
     // Small renders keep the run fast; the geometry code runs all the same.
     let scale = (48.0 / model.width().max(model.height()).max(1.0)).min(1.0);
-    let opts = LoadOptions { scale, split_precomps: path.ends_with("case-split.json") };
+    let opts = LoadOptions::default().scale(scale).split_precomps(path.ends_with("case-split.json"));
     let Ok(anim) = lottie::from_model(&path, model, &opts) else { return };
     assert!(anim.width >= 1 && anim.height >= 1 && anim.frames >= 1);
     for r in 0..anim.regions.len().min(6) {
@@ -207,7 +207,7 @@ pub fn corpus_loads() {
     for (k, doc) in corpus().iter().enumerate() {
         let path = dir.join(format!("corpus-{k}.json"));
         let model = lottie::parse(&path, &doc.to_string()).unwrap_or_else(|e| panic!("{e}"));
-        let opts = LoadOptions { scale: 0.25, split_precomps: false };
+        let opts = LoadOptions::default().scale(0.25).split_precomps(false);
         let anim = lottie::from_model(&path, model, &opts).unwrap_or_else(|e| panic!("{e}"));
         assert!(!anim.regions.is_empty(), "corpus file {k}");
     }

@@ -85,7 +85,7 @@ fn make(rng: &mut Rng) -> Files {
 fn check(dir: &Path) {
     let scale: f32 =
         std::fs::read_to_string(dir.join("scale.txt")).ok().and_then(|s| s.trim().parse().ok()).unwrap_or(1.0);
-    let Ok(a) = anim::load(&dir.join("masks"), &LoadOptions { scale, ..Default::default() }) else { return };
+    let Ok(a) = anim::load(&dir.join("masks"), &LoadOptions::default().scale(scale)) else { return };
     assert!(a.width as usize <= anim::MAX_SIDE as usize && a.height as usize <= anim::MAX_SIDE as usize);
     for f in 0..a.frames {
         if let Ok(rf) = a.render(0, f) {

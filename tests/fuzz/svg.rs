@@ -6,7 +6,7 @@
 //! at its first and last frame: every sequence loads and renders, or is an `Err`.
 
 use super::harness::{Files, Reader, Rng};
-use fluidymation::anim::{LoadOptions, svg};
+use fluidymation::anim::{self, LoadOptions};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -276,9 +276,9 @@ fn check(dir: &Path) {
     let frames = dir.join("frames");
     // The canvas size is known only after loading: load once at scale 1 to learn it, then
     // at the scale that makes it ≤ 64 px (what is checked is the second load).
-    let Ok(a) = svg::load(&frames, &LoadOptions::default()) else { return };
+    let Ok(a) = anim::load(&frames, &LoadOptions::default()) else { return };
     let scale = (64.0 / a.width.max(a.height) as f32).min(1.0);
-    let Ok(a) = svg::load(&frames, &LoadOptions { scale, ..Default::default() }) else { return };
+    let Ok(a) = anim::load(&frames, &LoadOptions::default().scale(scale)) else { return };
     for (r, region) in a.regions.iter().enumerate().take(6) {
         for f in [region.visible.start, region.visible.end.saturating_sub(1)] {
             if let Ok(rf) = a.render(r, f) {

@@ -3,9 +3,9 @@
 //! format (the frame of [`fluidymation::resume`] around the synthesizer's checkpoint).
 #![allow(dead_code)]
 
+use crc32fast::hash as crc32;
 use fluidymation::anim::{self, Animation, LoadOptions};
 use fluidymation::render::{self, RenderOptions, RenderSummary};
-use fluidymation::resume::crc32;
 use fluidymation::synth::Params;
 use fluidymation::{Error, NoProgress};
 use std::collections::BTreeMap;

@@ -380,7 +380,7 @@ pub fn from_model(path: &Path, model: Model, options: &LoadOptions) -> Result<An
     }
     let fps = model.fps as f64;
     let renderer = LottieRenderer { model: Arc::new(model), targets, strokes, width, height, scale: options.scale };
-    Ok(Animation::new(
+    let mut animation = Animation::new(
         path.to_path_buf(),
         width,
         height,
@@ -390,7 +390,10 @@ pub fn from_model(path: &Path, model: Model, options: &LoadOptions) -> Result<An
         background,
         warnings,
         Box::new(renderer),
-    ))
+    );
+    // The scale it was built at, as `anim::load` records it (a render reads it from here).
+    animation.scale = options.scale;
+    Ok(animation)
 }
 
 /// The background: the bottom-most run of full-canvas solids (its top-most layer names it),

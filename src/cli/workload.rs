@@ -2,13 +2,16 @@
 //! 1000 × 800 pixels with ≈ 111 000 masked pixels (a body and a neck that move and deform),
 //! stylized with a 400 × 222 × 20 exemplar (paper Table 2).
 
-use crate::error::Result;
-use crate::exemplar::{
+//!
+//! Part of the command line (`fluidymation bench`), not of the library; `benches/synth.rs`
+//! includes this file too.
+
+use fluidymation::exemplar::{
     Exemplar,
     generate::{GeneratorParams, generate},
 };
-use crate::img::Plane;
-use crate::progress::NoProgress;
+use fluidymation::img::Plane;
+use fluidymation::{NoProgress, Result};
 
 /// Frame `k` of the horse-like target at `width × height` (scaled from 1000 × 800): an ellipse
 /// body that trots right and breathes, with a neck that nods.
@@ -35,11 +38,9 @@ pub fn horse_exemplar() -> Result<Exemplar> {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
     #[test]
     fn horse_has_about_111k_pixels() {
-        let n = horse_mask(1000, 800, 0).data().iter().filter(|&&v| v > 0.5).count();
+        let n = super::horse_mask(1000, 800, 0).data().iter().filter(|&&v| v > 0.5).count();
         assert!((100_000..125_000).contains(&n), "{n}");
     }
 }

@@ -1,9 +1,9 @@
 //! Recoloring and compositing on synthetic "synthesized" layers whose pigment amount is known.
 
-use fluidymation::composite::{
-    self, Background, LayerFrame, Pigment, Recolor, StrokeMode, linear_to_srgb, recolor, recolor_with, srgb_to_linear,
-};
-use fluidymation::img::{Mask, Plane, Rgb, Rgba};
+use super::color::{linear_to_srgb, srgb_to_linear};
+use super::recolor::recolor;
+use crate::composite::{self, Background, LayerFrame, Pigment, Recolor, StrokeMode, recolor_with};
+use crate::img::{Mask, Plane, Rgb, Rgba};
 
 const W: usize = 96;
 const H: usize = 96;
@@ -390,17 +390,17 @@ fn sizes_must_match() {
 
 #[test]
 fn backgrounds_parse_and_load() {
-    assert_eq!(Background::parse("none", 4, 4).unwrap(), Background::Transparent);
-    assert_eq!(Background::parse("#ff0000", 4, 4).unwrap(), Background::Color([1.0, 0.0, 0.0, 1.0]));
-    let err = Background::parse("no-such-paper.png", 4, 4).unwrap_err().to_string();
-    assert!(err.contains("no-such-paper.png") && err.contains("color"), "{err}");
+    use crate::render::Background as Spec;
+    assert_eq!("none".parse::<Spec>().unwrap(), Spec::Transparent);
+    assert_eq!("#ff0000".parse::<Spec>().unwrap(), Spec::Color([1.0, 0.0, 0.0, 1.0]));
+    assert_eq!("no-such-paper.png".parse::<Spec>().unwrap(), Spec::Image("no-such-paper.png".into()));
 
     let dir = std::env::temp_dir().join(format!("fm-composite-bg-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("paper.png");
     let src = Plane::from_fn(40, 20, |x, _| if x < 20 { [0.2, 0.2, 0.2, 1.0] } else { [0.8, 0.8, 0.8, 1.0] });
-    fluidymation::img::save_rgba(&file, &src).unwrap();
-    let Background::Image(img) = Background::parse(file.to_str().unwrap(), 30, 30).unwrap() else {
+    crate::img::save_rgba(&file, &src).unwrap();
+    let Background::Image(img) = Background::load_image(&file, 30, 30).unwrap() else {
         panic!("expected an image background");
     };
     assert_eq!(img.size(), (30, 30));
