@@ -507,7 +507,9 @@ fn interrupted_renders_resume_to_the_same_bytes() {
     let state = out.join(".fluidymation");
     let resume: Vec<&str> = args.iter().copied().chain(["--resume"]).collect();
 
-    // Ctrl-C before the first frame: exit 130 with a hint, and resumable.
+    // Ctrl-C at the start: exit 130 with a hint, and resumable. (A signal that lands after
+    // every layer has painted the first frame lets that frame be written: it depends on the
+    // machine's speed, so the test asks only that whatever was written is whole.)
     let mut child = spawn(&demo(), &out, &args);
     wait_for(&mut child, &state.join("progress.toml"));
     interrupt(&child);
@@ -515,7 +517,10 @@ fn interrupted_renders_resume_to_the_same_bytes() {
     assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
     let err = stderr(&o);
     assert!(err.contains("interrupted") && err.contains("--resume") && err.contains(out.to_str().unwrap()), "{err}");
-    assert!(!out.join("0001.png").exists(), "the interrupt came before the first frame");
+    for frame in tree(&out).iter().filter(|n| n.ends_with(".png") && !n.contains('/')) {
+        let (a, b) = (std::fs::read(out.join(frame)).unwrap(), std::fs::read(full.join(frame)).unwrap());
+        assert!(a == b, "{frame}, written before the interrupt, differs from the uninterrupted render");
+    }
 
     // Killed (SIGKILL) in the middle of the resumed render.
     let mut child = spawn(&demo(), &out, &resume);

@@ -97,7 +97,9 @@ pub struct SynthFlags {
     /// (raw target extents, as in the paper), extent-falloff (the extents weigh as much deep
     /// inside a shape as at its edge, as in the paper), carried-rim (in the border band the
     /// merge of the carried and the up-scaled field picks the match with the smaller error, as
-    /// in the paper, instead of keeping the carried one), settle (the shifted field is not
+    /// in the paper, instead of keeping the carried one), carried-estimate (the merge of the
+    /// carried and the up-scaled field judges both against an estimate voted from the
+    /// up-scaled field instead of the carried one), settle (the shifted field is not
     /// settled onto its pieces: each carried match keeps the position its own warp gave it).
     #[arg(long, value_name = "PART", value_enum)]
     pub without: Vec<Part>,
@@ -113,6 +115,7 @@ pub enum Part {
     ExtentNormalization,
     ExtentFalloff,
     CarriedRim,
+    CarriedEstimate,
     Settle,
 }
 
@@ -199,6 +202,7 @@ impl SynthFlags {
                 Part::ExtentNormalization => b.ext_normalize(false),
                 Part::ExtentFalloff => b.extent_falloff(false),
                 Part::CarriedRim => b.carried_rim(false),
+                Part::CarriedEstimate => b.carried_estimate(false),
                 Part::Settle => b.settle(false),
             };
         }
@@ -389,7 +393,8 @@ mod tests {
         // Every part named by `--without` is switched off.
         let all_on = SynthFlags { without: Vec::new(), ..flags }.params().unwrap().to_builder();
         let off = all_on.direction_rule(false).time_shift(false).segments(false).advect(false);
-        let off = off.ext_normalize(false).extent_falloff(false).carried_rim(false).settle(false).build().unwrap();
+        let off = off.ext_normalize(false).extent_falloff(false).carried_rim(false).carried_estimate(false);
+        let off = off.settle(false).build().unwrap();
         assert_eq!(p, off);
     }
 

@@ -207,9 +207,10 @@ fn initial_field(
     repair(&init, &mut up);
     if let Some(mut pd) = prev_down {
         sanitize(&init, &mut pd);
-        // MERGENNF: per pixel, the field with the smaller error (against the estimate voted
-        // from the up-scaled field).
-        let voted = lv.estimate(&up, st);
+        // MERGENNF: per pixel, the field with the smaller error, against an estimate voted
+        // from the carried field where there is one (`ParamsBuilder::carried_estimate`), else
+        // from the up-scaled field.
+        let voted = if p.parts.carried_estimate { lv.estimate(&completed(&pd, &up), st) } else { lv.estimate(&up, st) };
         write_lanes(tgt, &voted, true);
         let omega = if lv.finest_vote_only {
             None
@@ -222,6 +223,18 @@ fn initial_field(
         out.evaluations += 2 * tgt.active.len() as u64;
     }
     up
+}
+
+/// The carried field `carried`, with the matches of `up` where nothing is carried (newly
+/// covered pixels): the basis of MERGENNF's estimate.
+fn completed(carried: &Nnf, up: &Nnf) -> Nnf {
+    let mut basis = carried.clone();
+    for (b, u) in basis.data.iter_mut().zip(&up.data) {
+        if !b.ok {
+            *b = *u;
+        }
+    }
+    basis
 }
 
 /// The EM iterations of a level: per iteration, PatchMatch sweeps against the current
@@ -356,7 +369,9 @@ fn repair(ctx: &Ctx, nnf: &mut Nnf) {
 
 /// MERGENNF: keeps, per pixel, whichever of `up` and `prev` has the smaller patch error —
 /// the up-scaled match `up` only when its error is below 1/κ of the carried match's
-/// (`kappa` = κ, 1 = the paper's comparison at face value). With `keep_rim`
+/// (`kappa` = κ, 1 = the paper's comparison at face value). The errors are measured against
+/// the estimate in `ctx`'s target, by default voted from the carried field
+/// ([`ParamsBuilder::carried_estimate`](super::ParamsBuilder::carried_estimate)). With `keep_rim`
 /// ([`ParamsBuilder::carried_rim`](super::ParamsBuilder::carried_rim)) the carried match is
 /// kept without comparison in the target's border segment (`I^df < 1`): SHIFTNNF re-anchored
 /// it to the target's distance from the edge, while the up-scaled match is placed only as
