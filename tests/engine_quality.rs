@@ -78,7 +78,7 @@ fn synthesize_guides(source: Source, params: &Params, guides: &[FrameGuides]) ->
 }
 
 fn measure(run: &Run, masks: &[Plane<f32>]) -> Report {
-    let options = EvalOptions { exemplar_scale: Some(SCALE), exemplar_step: Some(SPEED), ..Default::default() };
+    let options = EvalOptions::default().exemplar_scale(SCALE).exemplar_step(SPEED);
     eval::evaluate(&run.frames, exemplar(), masks, &options).unwrap()
 }
 

@@ -103,7 +103,7 @@ fn shuffled_frames_flicker_and_frozen_frames_are_glued() {
     // A fixed permutation: each frame shows the texture of a far-away exemplar time.
     let perm = [7, 2, 10, 0, 5, 11, 3, 8, 1, 9, 4, 6];
     let shuffled: Vec<_> = (0..FRAMES).map(|t| with_alpha(&b.field(perm[t]), &masks[t])).collect();
-    let opts = EvalOptions { patches: eval::PatchParams { samples: 256, ..Default::default() }, ..Default::default() };
+    let opts = EvalOptions::default().patches(eval::PatchParams { samples: 256, ..Default::default() });
     let r = eval::evaluate(&shuffled, &ex, &masks, &opts).unwrap();
     let ratio = r.summary.temporal_change_ratio.unwrap();
     let incoherent = r.summary.incoherent_change_ratio.unwrap();
@@ -271,7 +271,7 @@ fn palette_distance_measures_a_known_color_shift() {
     let masks: Vec<_> = (0..FRAMES).map(|t| b.mask(t)).collect();
     let out: Vec<_> =
         (0..FRAMES).map(|t| with_alpha(&b.frame(t).map(|c| [c[0] + 0.04, c[1], c[2] - 0.03]), &masks[t])).collect();
-    let opts = EvalOptions { patches: eval::PatchParams { samples: 64, ..Default::default() }, ..Default::default() };
+    let opts = EvalOptions::default().patches(eval::PatchParams { samples: 64, ..Default::default() });
     let r = eval::evaluate(&out, &ex, &masks, &opts).unwrap();
     let d = r.summary.palette_distance.unwrap();
     let tol = 0.5 / (eval::HISTOGRAM_BINS - 1) as f32 + 1e-5;
@@ -315,7 +315,7 @@ fn evaluation_is_deterministic_across_thread_counts() {
     let ex = b.exemplar();
     let masks: Vec<_> = (0..6).map(|t| b.mask(t)).collect();
     let out: Vec<_> = (0..6).map(|t| with_alpha(&b.field(5 - t), &masks[t])).collect();
-    let opts = EvalOptions { patches: eval::PatchParams { samples: 300, ..Default::default() }, ..Default::default() };
+    let opts = EvalOptions::default().patches(eval::PatchParams { samples: 300, ..Default::default() });
     let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
     let a = one.install(|| eval::evaluate(&out, &ex, &masks, &opts).unwrap());
     let b2 = eval::evaluate(&out, &ex, &masks, &opts).unwrap();
@@ -341,10 +341,10 @@ fn invalid_inputs_are_errors_not_panics() {
     wrong[1] = Plane::filled(40, 48, 1.0);
     let e = eval::evaluate(&out, &ex, &wrong, &o).unwrap_err().to_string();
     assert!(e.contains("target mask 2") && e.contains("40x48"), "{e}");
-    let bad = EvalOptions { interior_margin: f32::NAN, ..Default::default() };
+    let bad = EvalOptions::default().interior_margin(f32::NAN);
     assert!(eval::evaluate(&out, &ex, &masks, &bad).unwrap_err().to_string().contains("--interior-margin"));
     // The exemplar as the synthesis would see it with --src-scale 0.5 --src-speed 2.
-    let half = EvalOptions { exemplar_scale: Some(0.5), exemplar_step: Some(2), ..Default::default() };
+    let half = EvalOptions::default().exemplar_scale(0.5).exemplar_step(2);
     let r = eval::evaluate(&out, &ex, &masks, &half).unwrap();
     assert_eq!((r.exemplar.width, r.exemplar.frames, r.exemplar.step, r.exemplar.scale), (24, 2, 2, 0.5));
     // Empty target masks: nothing to measure, but no failure.
@@ -513,7 +513,7 @@ fn edge_darkening_sees_a_dark_rim_a_pale_rim_and_none() {
             })
             .collect()
     };
-    let opts = EvalOptions { patches: eval::PatchParams { samples: 64, ..Default::default() }, ..Default::default() };
+    let opts = EvalOptions::default().patches(eval::PatchParams { samples: 64, ..Default::default() });
     let dark = eval::evaluate(&rimmed(0.7), &ex, &masks, &opts).unwrap().summary;
     let pale = eval::evaluate(&rimmed(1.3), &ex, &masks, &opts).unwrap().summary;
     println!(
@@ -523,7 +523,7 @@ fn edge_darkening_sees_a_dark_rim_a_pale_rim_and_none() {
     assert!(dark.edge_darkening.unwrap() > 0.1, "{:?}", dark.edge_darkening);
     assert!(pale.edge_darkening.unwrap() < -0.05, "{:?}", pale.edge_darkening);
     // A band reaching past the interior's threshold is refused, naming the flag.
-    let bad = EvalOptions { rim: eval::RimParams { band: 13.0, ..Default::default() }, ..opts.clone() };
+    let bad = opts.clone().rim(eval::RimParams { band: 13.0, ..Default::default() });
     let e = eval::evaluate(&rimmed(0.7), &ex, &masks, &bad).unwrap_err().to_string();
     assert!(e.contains("--rim-interior"), "{e}");
 }
@@ -534,7 +534,7 @@ fn batched_evaluation_equals_the_whole() {
     let ex = b.exemplar();
     let masks: Vec<_> = (0..9).map(|t| b.mask(t)).collect();
     let out: Vec<_> = (0..9).map(|t| with_alpha(&b.field((t * 5) % 9), &masks[t])).collect();
-    let opts = EvalOptions { patches: eval::PatchParams { samples: 200, ..Default::default() }, ..Default::default() };
+    let opts = EvalOptions::default().patches(eval::PatchParams { samples: 200, ..Default::default() });
     let whole = eval::evaluate(&out, &ex, &masks, &opts).unwrap();
     let reference = eval::Reference::new(&ex, &opts).unwrap();
     let mut ev = eval::Evaluator::new(&reference, &opts, 9, Painted::Alpha).unwrap();
@@ -581,7 +581,7 @@ fn depth_matching_compares_like_with_like() {
     ex.masks = masks;
     let (out_rgb, out_masks) = banded(224, 100.0, 6);
     let out: Vec<_> = out_rgb.iter().zip(&out_masks).map(|(f, m)| with_alpha(f, m)).collect();
-    let opts = EvalOptions { patches: eval::PatchParams { samples: 64, ..Default::default() }, ..Default::default() };
+    let opts = EvalOptions::default().patches(eval::PatchParams { samples: 64, ..Default::default() });
     let s = eval::evaluate(&out, &ex, &out_masks, &opts).unwrap().summary;
     println!(
         "contrast {:?} (whole {:?}), palette {:?} (whole {:?})",

@@ -30,7 +30,7 @@ fn suite(options: SuiteOptions) -> SuiteReport {
 /// Floor: 32 dB, the measured 34.2 less 2 dB (above the 28).
 #[test]
 fn identity_gives_back_the_exemplar_at_full_size() {
-    let report = suite(SuiteOptions { targets: vec![], identity: true, ..SuiteOptions::default() });
+    let report = suite(SuiteOptions::default().targets([]).identity(true));
     // The bundled still (blue-swatch) has no identity to give back: with one frame there are no
     // extents, so no guide pins its interior, which is free texture (tests/still_exemplar.rs).
     let videos: Vec<_> = report.rows.iter().filter(|r| r.exemplar_summary.frames > 1).collect();
@@ -91,13 +91,13 @@ fn check(what: &str, value: Option<f32>, floor: f32, higher: bool, failures: &mu
 /// 0.042 against 0.035, incoherent change 0.88 against 0.83, motion 0.55 against 0.61.
 #[test]
 fn moving_targets_keep_the_rim_texture_and_coherence() {
-    let report = suite(SuiteOptions {
-        exemplars: vec!["blue-bloom".into(), "ink-rims".into()],
-        targets: vec![TargetKind::Growing, TargetKind::Translating],
-        identity: false,
-        frames: 24,
-        ..SuiteOptions::default()
-    });
+    let report = suite(
+        SuiteOptions::default()
+            .exemplars(["blue-bloom", "ink-rims"])
+            .targets([TargetKind::Growing, TargetKind::Translating])
+            .identity(false)
+            .frames(24),
+    );
     let mut failures = Vec::new();
     for r in &report.rows {
         let s = &r.summary;
@@ -137,13 +137,13 @@ fn moving_targets_keep_the_rim_texture_and_coherence() {
 /// minima less 0.07.
 #[test]
 fn long_target_keeps_its_paint_in_every_window() {
-    let report = suite(SuiteOptions {
-        exemplars: vec!["ink-rims".into(), "blue-bloom".into()],
-        targets: vec![TargetKind::Long],
-        identity: false,
-        scale: 0.5,
-        ..SuiteOptions::default()
-    });
+    let report = suite(
+        SuiteOptions::default()
+            .exemplars(["ink-rims", "blue-bloom"])
+            .targets([TargetKind::Long])
+            .identity(false)
+            .scale(0.5),
+    );
     let floors = [("ink-rims", 0.91, 0.93), ("blue-bloom", 0.86, 0.72)];
     let mut failures = Vec::new();
     for (r, (name, contrast, rim)) in report.rows.iter().zip(floors) {
@@ -182,14 +182,14 @@ fn long_target_keeps_its_paint_in_every_window() {
 #[test]
 fn carried_rim_and_settled_field_keep_the_paint_of_a_long_target() {
     let run = |params: Params| {
-        let report = suite(SuiteOptions {
-            exemplars: vec!["green-wash".into()],
-            targets: vec![TargetKind::Long],
-            identity: false,
-            scale: 0.5,
-            params,
-            ..SuiteOptions::default()
-        });
+        let report = suite(
+            SuiteOptions::default()
+                .exemplars(["green-wash"])
+                .targets([TargetKind::Long])
+                .identity(false)
+                .scale(0.5)
+                .params(params),
+        );
         let row = &report.rows[0];
         assert_eq!(row.windows.len(), 6);
         let min = |f: fn(&quality::Window) -> Option<f32>| {
@@ -225,14 +225,14 @@ fn carried_rim_and_settled_field_keep_the_paint_of_a_long_target() {
 #[test]
 fn extent_falloff_gives_still_interiors_the_exemplar_texture() {
     let run = |falloff: bool| {
-        suite(SuiteOptions {
-            exemplars: vec!["green-wash".into(), "yellow-granules".into()],
-            targets: vec![TargetKind::Still],
-            identity: false,
-            frames: 12,
-            params: Params::builder().extent_falloff(falloff).build().unwrap(),
-            ..SuiteOptions::default()
-        })
+        suite(
+            SuiteOptions::default()
+                .exemplars(["green-wash", "yellow-granules"])
+                .targets([TargetKind::Still])
+                .identity(false)
+                .frames(12)
+                .params(Params::builder().extent_falloff(falloff).build().unwrap()),
+        )
     };
     let (with, without) = (run(true), run(false));
     let mut failures = Vec::new();
@@ -261,13 +261,13 @@ fn extent_falloff_gives_still_interiors_the_exemplar_texture() {
 #[test]
 fn extent_term_tells_the_paint_s_age_on_the_identity() {
     let worst = |w_ext: f32| {
-        let report = suite(SuiteOptions {
-            exemplars: vec!["green-wash".into()],
-            targets: vec![],
-            identity: true,
-            params: Params::builder().w_ext(w_ext).build().unwrap(),
-            ..SuiteOptions::default()
-        });
+        let report = suite(
+            SuiteOptions::default()
+                .exemplars(["green-wash"])
+                .targets([])
+                .identity(true)
+                .params(Params::builder().w_ext(w_ext).build().unwrap()),
+        );
         report.rows[0].identity.as_ref().expect("identity row").psnr_min
     };
     let (with, without) = (worst(Params::default().w_ext()), worst(0.0));

@@ -78,7 +78,7 @@ fn pyramid_of_real_guides() {
             })
         })
         .collect();
-    let g = compute_sequence(&seq, &GuideParams { blur_sigma: 2.0, ..Default::default() }).unwrap();
+    let g = compute_sequence(&seq, &GuideParams::default().blur_sigma(2.0)).unwrap();
     let p = g[3].pyramid(4);
     assert_eq!(p.len(), 4);
     assert!(p[0] == g[3]);

@@ -21,7 +21,7 @@ fn disc_sequence(w: usize, h: usize, n: usize, at: impl Fn(usize) -> (f32, f32, 
 #[test]
 fn previews_are_written_and_encode_the_channels() {
     let seq = disc_sequence(90, 60, 12, |i| (30.0 + 2.0 * i as f32, 30.0, 15.0));
-    let g = compute_sequence(&seq, &GuideParams { blur_sigma: 2.0, ..Default::default() }).unwrap();
+    let g = compute_sequence(&seq, &GuideParams::default().blur_sigma(2.0)).unwrap();
     let dir = std::env::temp_dir().join(format!("fm-guide-preview-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let opts = PreviewOptions::default().border_width(5.0);

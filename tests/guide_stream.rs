@@ -21,7 +21,7 @@ fn frame(i: usize) -> Plane<f32> {
 }
 
 fn params() -> GuideParams {
-    GuideParams { blur_sigma: 2.0, ..Default::default() }
+    GuideParams::default().blur_sigma(2.0)
 }
 
 fn collect(stream: GuideStream) -> Vec<FrameGuides> {
@@ -91,9 +91,9 @@ fn errors_are_reported_not_panicked() {
     let err = GuideStream::new(5, |_| Err(Error::Cancelled), &params()).err();
     assert!(matches!(err, Some(Error::Cancelled)));
     // Bad parameters.
-    let bad = GuideParams { mask_threshold: 0.0, ..Default::default() };
+    let bad = GuideParams::default().mask_threshold(0.0);
     assert!(compute_sequence(&[frame(5)], &bad).is_err());
-    let bad = GuideParams { time_blur_sigma: f32::NAN, ..Default::default() };
+    let bad = GuideParams::default().time_blur_sigma(f32::NAN);
     assert!(GuideStream::new(1, |_| Ok(frame(5)), &bad).is_err());
     // Cancellation through the progress callback.
     let stop = |_: &str, done: usize, _: usize| done < 3;

@@ -123,7 +123,7 @@ fn measure(t: &Seq, frames: &[KeyedFrame], key: &Keyframe) -> Report {
         })
         .collect();
     let masks: Vec<Plane<f32>> = (0..t.frames).map(|k| t.coverage(k)).collect();
-    let options = EvalOptions { background: Some(PAPER), ..EvalOptions::default() };
+    let options = EvalOptions::default().background(PAPER);
     eval::evaluate(&rgba, &ex, &masks, &options).unwrap()
 }
 

@@ -56,15 +56,7 @@ impl Painter for Echo {
 }
 
 fn small(targets: Vec<TargetKind>) -> SuiteOptions {
-    SuiteOptions {
-        exemplars: vec!["ink-rims".into()],
-        targets,
-        scale: 0.25,
-        frames: 6,
-        long_frames: 12,
-        window: 5,
-        ..SuiteOptions::default()
-    }
+    SuiteOptions::default().exemplars(["ink-rims"]).targets(targets).scale(0.25).frames(6).long_frames(12).window(5)
 }
 
 fn scratch(name: &str) -> PathBuf {
@@ -76,7 +68,7 @@ fn scratch(name: &str) -> PathBuf {
 #[test]
 fn stand_ins_score_what_they_are() {
     let sheets = scratch("sheets");
-    let opts = SuiteOptions { sheets: Some(sheets.clone()), ..small(TargetKind::ALL.to_vec()) };
+    let opts = small(TargetKind::ALL.to_vec()).sheets(&sheets);
     let report = quality::run_with(&opts, &Echo, &NoProgress).unwrap();
     println!("{report}");
     // One row per target and the identity first; 128 px targets.
@@ -149,7 +141,7 @@ fn stand_ins_score_what_they_are() {
 
 #[test]
 fn a_rim_kept_over_the_long_target_scores_one_per_window() {
-    let opts = SuiteOptions { identity: false, long_frames: 15, ..small(vec![TargetKind::Long]) };
+    let opts = small(vec![TargetKind::Long]).identity(false).long_frames(15);
     let report = quality::run_with(&opts, &Rimmed, &NoProgress).unwrap();
     let long = &report.rows[0];
     // The luma of 0.6 inside and 0.4 on the edge: a rim of 0.2 in every frame and window.
@@ -164,9 +156,9 @@ fn a_rim_kept_over_the_long_target_scores_one_per_window() {
 #[test]
 fn engine_runs_the_user_pipeline_deterministically() {
     // Two small targets painted by the engine: the lanes do not change a number.
-    let opts = SuiteOptions { identity: false, frames: 5, ..small(vec![TargetKind::Growing, TargetKind::Limb]) };
+    let opts = small(vec![TargetKind::Growing, TargetKind::Limb]).identity(false).frames(5);
     let a = quality::run(&opts, &NoProgress).unwrap();
-    let b = quality::run(&SuiteOptions { jobs: 1, ..opts.clone() }, &NoProgress).unwrap();
+    let b = quality::run(&opts.clone().jobs(1), &NoProgress).unwrap();
     println!("{a}");
     let strip =
         |r: &quality::SuiteReport| r.rows.iter().map(|r| (r.summary.clone(), r.coverage_alpha)).collect::<Vec<_>>();
@@ -196,16 +188,14 @@ fn engine_runs_the_user_pipeline_deterministically() {
 
 #[test]
 fn bad_options_are_named() {
-    let e = quality::run(&SuiteOptions { scale: 0.05, ..small(vec![]) }, &NoProgress).unwrap_err().to_string();
+    let e = quality::run(&small(vec![]).scale(0.05), &NoProgress).unwrap_err().to_string();
     assert!(e.contains("--scale"), "{e}");
-    let e = quality::run(&SuiteOptions { frames: 1, ..small(vec![]) }, &NoProgress).unwrap_err().to_string();
+    let e = quality::run(&small(vec![]).frames(1), &NoProgress).unwrap_err().to_string();
     assert!(e.contains("--frames"), "{e}");
-    let e = quality::run(&SuiteOptions { exemplars: vec!["no-such-exemplar".into()], ..small(vec![]) }, &NoProgress)
-        .unwrap_err()
-        .to_string();
+    let e = quality::run(&small(vec![]).exemplars(["no-such-exemplar"]), &NoProgress).unwrap_err().to_string();
     assert!(e.contains("no-such-exemplar"), "{e}");
-    let bad_eval = eval::EvalOptions { paint_threshold: 5.0, ..Default::default() };
-    let e = quality::run(&SuiteOptions { eval: bad_eval, ..small(vec![]) }, &NoProgress).unwrap_err().to_string();
+    let bad_eval = eval::EvalOptions::default().paint_threshold(5.0);
+    let e = quality::run(&small(vec![]).eval(bad_eval), &NoProgress).unwrap_err().to_string();
     assert!(e.contains("--paint-threshold"), "{e}");
 }
 

@@ -62,13 +62,11 @@ impl Painter for Independent {
 }
 
 fn moving(painter: &dyn Painter) -> SuiteReport {
-    let options = SuiteOptions {
-        exemplars: vec!["blue-swatch".into()],
-        targets: vec![TargetKind::Growing, TargetKind::Translating, TargetKind::Rotating],
-        identity: false,
-        frames: 24,
-        ..SuiteOptions::default()
-    };
+    let options = SuiteOptions::default()
+        .exemplars(["blue-swatch"])
+        .targets([TargetKind::Growing, TargetKind::Translating, TargetKind::Rotating])
+        .identity(false)
+        .frames(24);
     let report = quality::run_with(&options, painter, &NoProgress).unwrap();
     println!("{report}");
     report

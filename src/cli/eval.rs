@@ -90,20 +90,26 @@ pub fn run(args: Args, ctx: &Ctx) -> anyhow::Result<()> {
         None => None,
     };
     let defaults = EvalOptions::default();
-    let options = EvalOptions {
-        interior_margin: args.interior_margin,
-        background,
-        paint_threshold: args.paint_threshold,
-        exemplar_step: args.src_speed,
-        exemplar_scale: args.src_scale,
-        rim: eval::RimParams { band: args.rim_band, interior: args.rim_interior, ..defaults.rim },
-        patches: eval::PatchParams { samples: args.patch_samples, seed: args.seed, ..defaults.patches },
-        motion: eval::MotionParams {
+    let mut options = EvalOptions::default()
+        .interior_margin(args.interior_margin)
+        .paint_threshold(args.paint_threshold)
+        .rim(eval::RimParams { band: args.rim_band, interior: args.rim_interior, ..defaults.rim })
+        .patches(eval::PatchParams { samples: args.patch_samples, seed: args.seed, ..defaults.patches })
+        .motion(eval::MotionParams {
             block: eval::BlockMatchParams { radius: args.flow_radius, ..defaults.motion.block },
             ..defaults.motion
-        },
-        ..defaults
-    };
+        });
+    // Unset on the command line: the defaults (an estimated background, the exemplar's own step
+    // and scale).
+    if let Some(color) = background {
+        options = options.background(color);
+    }
+    if let Some(step) = args.src_speed {
+        options = options.exemplar_step(step);
+    }
+    if let Some(scale) = args.src_scale {
+        options = options.exemplar_scale(scale);
+    }
     options.validate()?;
 
     let frame_files = fluidymation::seq::list_sequence(&args.out_dir, &["png"])

@@ -72,20 +72,20 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
             .collect::<Result<Vec<_>>>()?;
         (args.target.iter().any(|t| t == IDENTITY), targets)
     };
-    let options = SuiteOptions {
-        exemplars: args.exemplar,
-        exemplar_dirs: args.exemplar_dir.dirs,
-        targets,
-        identity,
-        scale: args.scale,
-        frames: args.frames,
-        long_frames: args.long_frames,
-        window: args.window,
-        params,
-        sheets: args.output.clone(),
-        jobs: args.jobs,
-        ..defaults
-    };
+    let mut options = SuiteOptions::default()
+        .exemplars(args.exemplar)
+        .exemplar_dirs(args.exemplar_dir.dirs)
+        .targets(targets)
+        .identity(identity)
+        .scale(args.scale)
+        .frames(args.frames)
+        .long_frames(args.long_frames)
+        .window(args.window)
+        .params(params)
+        .jobs(args.jobs);
+    if let Some(dir) = &args.output {
+        options = options.sheets(dir);
+    }
     options.validate()?;
     let bars = Bars::new(ctx.quiet);
     let report = quality::run(&options, &bars);

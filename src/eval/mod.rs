@@ -166,9 +166,11 @@ impl Mean {
     }
 }
 
-/// Settings of [`evaluate`]. The defaults suit sequences of a few hundred pixels a side.
+/// Settings of [`evaluate`]: `EvalOptions::default().interior_margin(3.0).background(paper)`.
+/// The defaults suit sequences of a few hundred pixels a side.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
+#[non_exhaustive]
 pub struct EvalOptions {
     /// Interior margin, pixels: contrast, palette and patch statistics use pixels at least this
     /// far inside the mask (target masks for the output, exemplar masks for the exemplar).
@@ -221,6 +223,66 @@ fn check(ok: bool, name: &str, value: impl std::fmt::Display, allowed: &str) -> 
 }
 
 impl EvalOptions {
+    /// Sets [`EvalOptions::interior_margin`], pixels. Default: 5.
+    pub fn interior_margin(mut self, margin: f32) -> Self {
+        self.interior_margin = margin;
+        self
+    }
+
+    /// Sets [`EvalOptions::temporal`]. Default: [`TemporalParams::default`].
+    pub fn temporal(mut self, params: TemporalParams) -> Self {
+        self.temporal = params;
+        self
+    }
+
+    /// Sets [`EvalOptions::motion`]. Default: [`MotionParams::default`].
+    pub fn motion(mut self, params: MotionParams) -> Self {
+        self.motion = params;
+        self
+    }
+
+    /// Sets [`EvalOptions::rim`]. Default: [`RimParams::default`].
+    pub fn rim(mut self, params: RimParams) -> Self {
+        self.rim = params;
+        self
+    }
+
+    /// Sets [`EvalOptions::coherence`]. Default: [`CoherenceParams::default`].
+    pub fn coherence(mut self, params: CoherenceParams) -> Self {
+        self.coherence = params;
+        self
+    }
+
+    /// Sets [`EvalOptions::patches`]. Default: [`PatchParams::default`].
+    pub fn patches(mut self, params: PatchParams) -> Self {
+        self.patches = params;
+        self
+    }
+
+    /// Sets [`EvalOptions::background`], sRGB in `0..=1`. Default: estimated.
+    pub fn background(mut self, color: Rgb) -> Self {
+        self.background = Some(color);
+        self
+    }
+
+    /// Sets [`EvalOptions::paint_threshold`]. Default: 0.1.
+    pub fn paint_threshold(mut self, threshold: f32) -> Self {
+        self.paint_threshold = threshold;
+        self
+    }
+
+    /// Sets [`EvalOptions::exemplar_step`]. Default: the exemplar's recommended `speed`.
+    pub fn exemplar_step(mut self, step: usize) -> Self {
+        self.exemplar_step = Some(step);
+        self
+    }
+
+    /// Sets [`EvalOptions::exemplar_scale`]. Default: the exemplar's recommended `scale`.
+    pub fn exemplar_scale(mut self, scale: f32) -> Self {
+        self.exemplar_scale = Some(scale);
+        self
+    }
+
     /// Checks every setting's range; the error names the command-line flag.
     pub fn validate(&self) -> Result<()> {
         let finite_nonneg = |v: f32| v.is_finite() && v >= 0.0;

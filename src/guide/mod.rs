@@ -56,8 +56,9 @@ use crate::error::{Error, Result};
 use crate::img::{Mask, Plane};
 use glam::Vec2;
 
-/// Parameters of guide computation.
+/// Parameters of guide computation: `GuideParams::default().blur_sigma(2.0)`.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct GuideParams {
     /// σ of the Gaussian blur applied to masks before thresholding (`--blur-sigma`), pixels.
     /// Default: 0 (no blur; the thesis uses 8). The thesis blurs hand-drawn bitmap masks to
@@ -100,6 +101,42 @@ impl Default for GuideParams {
 }
 
 impl GuideParams {
+    /// Sets [`GuideParams::blur_sigma`], pixels, in `0..=100`. Default: 0.
+    pub fn blur_sigma(mut self, sigma: f32) -> Self {
+        self.blur_sigma = sigma;
+        self
+    }
+
+    /// Sets [`GuideParams::mask_threshold`], in `(0, 1]`. Default: 0.3.
+    pub fn mask_threshold(mut self, threshold: f32) -> Self {
+        self.mask_threshold = threshold;
+        self
+    }
+
+    /// Sets [`GuideParams::time_blur_sigma`], frames, in `0..=20`. Default: 2.
+    pub fn time_blur_sigma(mut self, sigma: f32) -> Self {
+        self.time_blur_sigma = sigma;
+        self
+    }
+
+    /// Sets [`GuideParams::flow_time_radius`], frames, in `0..=60`. Default: 3.
+    pub fn flow_time_radius(mut self, radius: usize) -> Self {
+        self.flow_time_radius = radius;
+        self
+    }
+
+    /// Sets [`GuideParams::tangential_fit`]. Default: true.
+    pub fn tangential_fit(mut self, yes: bool) -> Self {
+        self.tangential_fit = yes;
+        self
+    }
+
+    /// Sets [`GuideParams::laplace_tolerance`], in `(0, 0.1]`. Default: 10⁻⁴.
+    pub fn laplace_tolerance(mut self, tolerance: f32) -> Self {
+        self.laplace_tolerance = tolerance;
+        self
+    }
+
     /// Checks every value's range.
     pub fn validate(&self) -> Result<()> {
         let check = |name: &str, v: f32, lo: f32, hi: f32, lo_open: bool, allowed: &str| {

@@ -164,7 +164,7 @@ impl<'p> GuideStreamBuilder<'p> {
 ///     let (dx, dy) = (x as f32 - 20.0 - i as f32, y as f32 - 20.0);
 ///     if dx * dx + dy * dy < 100.0 { 1.0 } else { 0.0 }
 /// });
-/// let params = GuideParams { blur_sigma: 1.0, ..Default::default() };
+/// let params = GuideParams::default().blur_sigma(1.0);
 /// let stream = GuideStream::new(6, |i| Ok(disc(i)), &params)?;
 /// for g in stream {
 ///     let g = g?;

@@ -35,13 +35,11 @@
 //! use fluidymation::quality::{self, SuiteOptions, TargetKind};
 //! # fn main() -> fluidymation::Result<()> {
 //! // A quick look: one exemplar, two targets at half size, 16 frames.
-//! let opts = SuiteOptions {
-//!     exemplars: vec!["ink-rims".into()],
-//!     targets: vec![TargetKind::Growing, TargetKind::Limb],
-//!     scale: 0.5,
-//!     frames: 16,
-//!     ..SuiteOptions::default()
-//! };
+//! let opts = SuiteOptions::default()
+//!     .exemplars(["ink-rims"])
+//!     .targets([TargetKind::Growing, TargetKind::Limb])
+//!     .scale(0.5)
+//!     .frames(16);
 //! let report = quality::run(&opts, &fluidymation::NoProgress)?;
 //! println!("{report}");
 //! # Ok(()) }
@@ -81,8 +79,9 @@ pub const MIN_RIM_TO_KEEP: f32 = 0.1;
 /// PSNR reported for a frame identical to the exemplar's, dB.
 pub const PSNR_CAP: f32 = 100.0;
 
-/// What the suite runs.
+/// What the suite runs: `SuiteOptions::default().exemplars(["ink-rims"]).scale(0.5)`.
 #[derive(Clone, Debug)]
+#[non_exhaustive]
 pub struct SuiteOptions {
     /// Exemplars by name or folder (names are looked up like `synth --exemplar`); empty = every
     /// bundled exemplar.
@@ -136,6 +135,78 @@ impl Default for SuiteOptions {
 }
 
 impl SuiteOptions {
+    /// Sets [`SuiteOptions::exemplars`], names or folders. Default: every bundled exemplar.
+    pub fn exemplars<S: Into<String>>(mut self, exemplars: impl IntoIterator<Item = S>) -> Self {
+        self.exemplars = exemplars.into_iter().map(Into::into).collect();
+        self
+    }
+
+    /// Sets [`SuiteOptions::exemplar_dirs`]. Default: none.
+    pub fn exemplar_dirs<P: Into<PathBuf>>(mut self, dirs: impl IntoIterator<Item = P>) -> Self {
+        self.exemplar_dirs = dirs.into_iter().map(Into::into).collect();
+        self
+    }
+
+    /// Sets [`SuiteOptions::targets`]. Default: all of [`TargetKind::ALL`].
+    pub fn targets(mut self, targets: impl IntoIterator<Item = TargetKind>) -> Self {
+        self.targets = targets.into_iter().collect();
+        self
+    }
+
+    /// Sets [`SuiteOptions::identity`]. Default: true.
+    pub fn identity(mut self, yes: bool) -> Self {
+        self.identity = yes;
+        self
+    }
+
+    /// Sets [`SuiteOptions::scale`], in `(0, 4]`. Default: 1.
+    pub fn scale(mut self, scale: f32) -> Self {
+        self.scale = scale;
+        self
+    }
+
+    /// Sets [`SuiteOptions::frames`], in `2..=10000`. Default: 48.
+    pub fn frames(mut self, frames: usize) -> Self {
+        self.frames = frames;
+        self
+    }
+
+    /// Sets [`SuiteOptions::long_frames`], in `2..=10000`. Default: 300.
+    pub fn long_frames(mut self, frames: usize) -> Self {
+        self.long_frames = frames;
+        self
+    }
+
+    /// Sets [`SuiteOptions::window`], frames. Default: 50.
+    pub fn window(mut self, frames: usize) -> Self {
+        self.window = frames;
+        self
+    }
+
+    /// Sets [`SuiteOptions::params`]. Default: the defaults, seed 1.
+    pub fn params(mut self, params: Params) -> Self {
+        self.params = params;
+        self
+    }
+
+    /// Sets [`SuiteOptions::eval`]. Default: [`EvalOptions::default`].
+    pub fn eval(mut self, eval: EvalOptions) -> Self {
+        self.eval = eval;
+        self
+    }
+
+    /// Sets [`SuiteOptions::sheets`], the folder of the contact sheets. Default: none.
+    pub fn sheets(mut self, dir: impl Into<PathBuf>) -> Self {
+        self.sheets = Some(dir.into());
+        self
+    }
+
+    /// Sets [`SuiteOptions::jobs`], in `1..=64`. Default: 2.
+    pub fn jobs(mut self, jobs: usize) -> Self {
+        self.jobs = jobs;
+        self
+    }
+
     /// Checks the settings; the error names the command-line flag.
     pub fn validate(&self) -> Result<()> {
         if !(self.scale.is_finite() && self.scale > 0.0 && self.scale <= 4.0) {

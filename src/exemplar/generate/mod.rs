@@ -141,6 +141,7 @@ impl FromStr for Pigment {
 /// call [`GeneratorParams::validate`]). Stored in `exemplar.toml` under `[generator]`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
+#[non_exhaustive]
 pub struct GeneratorParams {
     /// Frame width, pixels. Default: 200. Range: 16–2048.
     pub width: usize,
