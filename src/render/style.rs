@@ -32,7 +32,23 @@ pub enum Style {
     /// a still image.
     Named(String),
     /// An exemplar in memory: loaded, generated ([`exemplar::generate`]) or imported
-    /// ([`exemplar::import`]) by the caller.
+    /// ([`exemplar::import`]) by the caller. A still painted in memory is one frame keyed out
+    /// into its mask by [`exemplar::import::from_frames`]:
+    ///
+    /// ```
+    /// use fluidymation::exemplar::import::{ImportOptions, from_frames};
+    /// use fluidymation::img::Plane;
+    /// use fluidymation::render::Style;
+    /// // A blue blot on cream paper.
+    /// let image = Plane::from_fn(96, 96, |x, y| {
+    ///     let d = ((x as f32 - 48.0).powi(2) + (y as f32 - 48.0).powi(2)).sqrt();
+    ///     if d < 30.0 { [0.2, 0.3, 0.8 - d / 200.0] } else { [0.95, 0.93, 0.88] }
+    /// });
+    /// let still = from_frames(vec![image], &[], &ImportOptions::default().name("blot"))?;
+    /// assert_eq!(still.frames.len(), 1);
+    /// let style = Style::exemplar(still);
+    /// # Ok::<(), fluidymation::Error>(())
+    /// ```
     Exemplar(Arc<Exemplar>),
     /// A still image (PNG or JPEG) of paint on paper, keyed out into its mask as
     /// `fluidymation exemplar import` does ([`exemplar::import::still`]).
