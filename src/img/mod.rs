@@ -145,6 +145,21 @@ impl<T: Copy> Plane<T> {
         Plane { width, height, data }
     }
 
+    /// [`Plane::from_fn`] with the rows computed in parallel (`f` must not depend on the order).
+    pub fn par_from_fn(width: usize, height: usize, f: impl Fn(usize, usize) -> T + Sync) -> Self
+    where
+        T: Send + Sync + Default,
+    {
+        use rayon::prelude::*;
+        let mut data = vec![T::default(); width * height];
+        data.par_chunks_mut(width.max(1)).enumerate().for_each(|(y, row)| {
+            for (x, v) in row.iter_mut().enumerate() {
+                *v = f(x, y);
+            }
+        });
+        Plane { width, height, data }
+    }
+
     /// Wraps row-major `data`; `None` if its length is not `width * height`.
     pub fn from_vec(width: usize, height: usize, data: Vec<T>) -> Option<Self> {
         (data.len() == width * height).then_some(Plane { width, height, data })
