@@ -345,8 +345,21 @@ impl Split {
 
 /// `mask` where `keep(share)` holds within [`MARGIN`] pixels.
 fn narrow(mask: &Mask, share: &Plane<f32>, keep: impl Fn(f32) -> bool) -> Mask {
-    let near = super::source::dilate(&share.map(keep), MARGIN);
-    Plane::par_from_fn(mask.width(), mask.height(), |x, y| mask.get(x, y) && near.get(x, y))
+    let (w, h) = mask.size();
+    let mut out = Plane::new(w, h);
+    // Within the mask's bounding box (shapes often fill a small part of a wide frame).
+    let Some(r) = mask.bounding_box() else { return out };
+    let r = r.expand(MARGIN, w, h);
+    let near = super::source::dilate(
+        &Plane::from_fn(r.width(), r.height(), |x, y| keep(share.get(r.x0 + x, r.y0 + y))),
+        MARGIN,
+    );
+    for y in r.y0..r.y1 {
+        for x in r.x0..r.x1 {
+            out.set(x, y, mask.get(x, y) && near.get(x - r.x0, y - r.y0));
+        }
+    }
+    out
 }
 
 /// How far outside its mask a frame's material coordinates and flow are continued
