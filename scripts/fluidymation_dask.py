@@ -47,6 +47,17 @@ import threading
 import time
 import uuid
 
+_STDERR = threading.Lock()
+
+
+def tell(text):
+    """Writes one line on stderr, whole: the progress comes from two threads (the job starts
+    arrive on Dask's event thread), and print() writes a line's text and its end separately, so
+    two lines could run into each other."""
+    with _STDERR:
+        sys.stderr.write(text + "\n")
+        sys.stderr.flush()
+
 EVENT_TOPIC = "fluidymation-job"
 
 
@@ -219,7 +230,7 @@ def main(argv=None):
 
     def say(text):
         if not args.quiet:
-            print(text, file=sys.stderr, flush=True)
+            tell(text)
 
     cluster = None
     if args.local is not None:
@@ -247,13 +258,9 @@ def main(argv=None):
                 starts[msg["job"]] = starts.get(msg["job"], 0) + 1
                 n = starts[msg["job"]]
             if n > 1 and msg.get("attempt", 1) == 1:
-                print(
-                    "retry: %s started again on %s (the worker running it was lost)" % (msg["job"], msg["worker"]),
-                    file=sys.stderr,
-                    flush=True,
-                )
+                tell("retry: %s started again on %s (the worker running it was lost)" % (msg["job"], msg["worker"]))
             elif n > 1:
-                print("retry: %s run again on %s (it was killed by a signal)" % (msg["job"], msg["worker"]), file=sys.stderr, flush=True)
+                tell("retry: %s run again on %s (it was killed by a signal)" % (msg["job"], msg["worker"]))
             else:
                 say("start  %s on %s" % (msg["job"], msg["worker"]))
 
@@ -298,30 +305,28 @@ def main(argv=None):
                 failed[job["id"]] = exc
                 failing_dep = next((d for d in job["deps"] if futures[d].status == "error"), None)
                 if failing_dep is not None:
-                    print("%s  SKIPPED %s: its job %s failed" % (progress, job["id"], failing_dep), file=sys.stderr, flush=True)
+                    tell("%s  SKIPPED %s: its job %s failed" % (progress, job["id"], failing_dep))
                 else:
-                    print("%s  FAILED %s: %s" % (progress, job["id"], exc), file=sys.stderr, flush=True)
+                    tell("%s  FAILED %s: %s" % (progress, job["id"], exc))
 
         elapsed = time.monotonic() - start
         retried = sorted(j for j, n in starts.items() if n > 1)
         files = plan.get("files", [])
         bad = [fl for fl in files if fl["composite_job"] in failed]
-        print(
+        tell(
             "%d files in %.1f s: %d rendered, %d failed%s"
-            % (len(files), elapsed, len(files) - len(bad), len(bad), (" (retried: %s)" % ", ".join(retried)) if retried else ""),
-            file=sys.stderr,
-            flush=True,
+            % (len(files), elapsed, len(files) - len(bad), len(bad), (" (retried: %s)" % ", ".join(retried)) if retried else "")
         )
         for fl in files:
             if fl["composite_job"] in failed:
                 culprits = [j for j in fl["layer_jobs"] + [fl["composite_job"]] if j in failed and futures[j].status == "error"]
                 first = next((j for j in culprits if not any(futures[d].status == "error" for d in next(x for x in jobs if x["id"] == j)["deps"])), culprits[0])
-                print("  FAILED  %s: %s" % (fl["input"], failed[first]), file=sys.stderr)
+                tell("  FAILED  %s: %s" % (fl["input"], failed[first]))
             elif not args.quiet:
-                print("  ok      %s -> %s%s" % (fl["input"], fl["out_dir"], (", " + fl["gif"]) if fl.get("gif") else ""), file=sys.stderr)
+                tell("  ok      %s -> %s%s" % (fl["input"], fl["out_dir"], (", " + fl["gif"]) if fl.get("gif") else ""))
         return 1 if failed else 0
     except KeyboardInterrupt:
-        print("interrupted; run the same command again: finished jobs are skipped, layers continue from their checkpoints", file=sys.stderr)
+        tell("interrupted; run the same command again: finished jobs are skipped, layers continue from their checkpoints")
         return 130
     finally:
         client.close()

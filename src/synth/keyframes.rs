@@ -181,17 +181,20 @@ pub fn paint(
         let seq_a: Vec<usize> = (ka..kb).collect();
         let seq_b: Vec<usize> = (ka + 1..=kb).rev().collect();
         // The backward pass's guides are computed while the forward pass paints (it leaves a
-        // core idle part of the time).
-        let stream_b = std::thread::scope(|s| {
-            let stream_b = s.spawn(|| guides(&seq_b, coverage, params));
+        // core idle part of the time) — as a job of the thread pool, not a thread of its own:
+        // layers are painted in the pool's threads, and one of them blocked waiting for a thread
+        // that waits for the pool could leave no thread to run it.
+        let mut stream_b = None;
+        rayon::in_place_scope(|s| -> Result<()> {
+            s.spawn(|_| stream_b = Some(guides(&seq_b, coverage, params)));
             let stream_a = guides(&seq_a, coverage, params)?;
             pass(&sources[a], params, &seq_a, stream_a, &mut |k, g| split.forward(k, g), &mut |j, out| {
                 tick();
                 held.put(j, out);
                 Ok(())
-            })?;
-            stream_b.join().unwrap_or_else(|e| std::panic::resume_unwind(e))
+            })
         })?;
+        let stream_b = stream_b.ok_or_else(|| Error::param("keyframe pass", "no guides", "the backward pass's"))??;
         pass(&sources[a + 1], params, &seq_b, stream_b, &mut |k, g| split.backward(seq_b[k], g), &mut |j, out| {
             tick();
             let fwd = held.take(j)?;
