@@ -288,15 +288,13 @@ struct Split {
     coords: Option<Plane<Vec2>>,
     /// The flow guide of that frame (its motion to the next).
     flow: Option<Plane<Vec2>>,
-    /// The coverage masks of the frames between A and B, whole (the passes narrow theirs).
-    masks: Vec<Option<Mask>>,
     /// The share of B per frame between A and B.
     shares: Vec<Option<Plane<f32>>>,
 }
 
 impl Split {
     fn new(ka: usize, kb: usize, seed: u64) -> Split {
-        Split { ka, kb, seed, coords: None, flow: None, masks: vec![None; kb - ka], shares: vec![None; kb - ka] }
+        Split { ka, kb, seed, coords: None, flow: None, shares: vec![None; kb - ka] }
     }
 
     /// The forward pass's guides of frame `A + k`: the coordinates carried to it, its shares,
@@ -317,7 +315,6 @@ impl Split {
                 let p = coords.get(x, y);
                 if g.mask.get(x, y) { from_later(cell_noise(p.x / CELL, p.y / CELL, self.seed), t) } else { f32::NAN }
             });
-            self.masks[k] = Some(g.mask.clone());
             g.mask = narrow(&g.mask, &share, |s| s < 1.0);
             self.shares[k] = Some(share);
         }
@@ -332,17 +329,19 @@ impl Split {
     }
 
     /// Frame j from the forward pass's `fwd` (painting A) and the backward pass's `back`
-    /// (painting B), pixel by pixel by the share of B; the mask is the frame's whole coverage.
+    /// (painting B), pixel by pixel by the share of B; the mask is the frame's whole coverage,
+    /// the union of the two passes' narrowed masks (every pixel of it has `k < 1` or `k > 0`).
     fn merge(&self, j: usize, fwd: KeyedFrame, back: SynthFrame) -> Result<KeyedFrame> {
-        let k = j.wrapping_sub(self.ka);
-        let (Some(Some(share)), Some(Some(mask))) = (self.shares.get(k), self.masks.get(k)) else {
+        let Some(Some(share)) = self.shares.get(j.wrapping_sub(self.ka)) else {
             return Err(Error::param("keyframe pass", format!("frame {}", j + 1), "a frame between two keyframes"));
         };
-        let rgb = Plane::par_from_fn(mask.width(), mask.height(), |x, y| {
+        let (w, h) = share.size();
+        let rgb = Plane::par_from_fn(w, h, |x, y| {
             let (a, b, s) = (fwd.rgb.get(x, y), back.rgb.get(x, y), share.get(x, y));
             if s.is_nan() { a } else { [0, 1, 2].map(|i| a[i] + s * (b[i] - a[i])) }
         });
-        Ok(KeyedFrame { rgb, mask: mask.clone() })
+        let mask = Plane::par_from_fn(w, h, |x, y| fwd.mask.get(x, y) || back.mask.get(x, y));
+        Ok(KeyedFrame { rgb, mask })
     }
 }
 
@@ -380,10 +379,10 @@ const BAND: usize = 16;
 fn extend(coords: &mut Plane<Vec2>, flow: &mut Plane<Vec2>, mask: &Mask) {
     const AROUND: [(isize, isize); 8] = [(-1, -1), (0, -1), (1, -1), (-1, 0), (1, 0), (-1, 1), (0, 1), (1, 1)];
     let (w, h) = mask.size();
-    let neighbours = move |x: usize, y: usize| {
+    let neighbours = |x: usize, y: usize| {
         AROUND.iter().filter_map(move |&(dx, dy)| {
             let (nx, ny) = (x as isize + dx, y as isize + dy);
-            (nx >= 0 && ny >= 0 && (nx as usize) < w && (ny as usize) < h).then_some((nx as usize, ny as usize, dx, dy))
+            mask.contains(nx, ny).then_some((nx as usize, ny as usize, dx, dy))
         })
     };
     let mut set = mask.clone();
