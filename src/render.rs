@@ -526,7 +526,7 @@ pub(crate) fn render_with(
     };
     // Layers painted from keyframes: every frame painted first (the backward passes), to the
     // state folder.
-    let keyed = keys::paint_regions(anim, opts, &range, &painted, &opts.out_dir.join(STATE_DIR))?;
+    let keyed = keys::paint_regions(anim, opts, &range, &painted, &opts.out_dir.join(STATE_DIR), progress)?;
 
     let stages: Vec<String> = (0..anim.regions.len()).map(|r| stage_name(anim, r)).collect();
     let mut layers = start_layers(anim, opts, &range, &prepared, done, &keyed)?;

@@ -35,9 +35,17 @@ fn stream_equals_in_memory_for_any_segment_length() {
     let expected = compute_sequence(&frames, &params()).unwrap();
     assert!(expected[10].ext_pos.data().iter().any(|&v| v > 1.0), "the test sequence must move");
     assert!(expected[10].ext_neg.data().iter().any(|&v| v > 1.0));
-    for seg in [None, Some(1), Some(3), Some(7), Some(40)] {
+    for (seg, keep) in [
+        (None, false),
+        (Some(1), false),
+        (Some(3), false),
+        (Some(7), false),
+        (Some(40), false),
+        (None, true),
+        (Some(3), true),
+    ] {
         let mut calls = vec![0; n];
-        let mut b = GuideStream::builder(&params());
+        let mut b = GuideStream::builder(&params()).keep_flows(keep);
         if let Some(k) = seg {
             b = b.segment_len(k);
         }
@@ -52,7 +60,7 @@ fn stream_equals_in_memory_for_any_segment_length() {
         let got = collect(stream);
         assert_eq!(got.len(), n);
         for (i, (a, b)) in got.iter().zip(&expected).enumerate() {
-            assert!(a == b, "segment length {seg:?}: frame {i} differs");
+            assert!(a == b, "segment length {seg:?}, flows kept {keep}: frame {i} differs");
         }
     }
 }
@@ -129,5 +137,26 @@ fn flow_estimate_alone_matches_the_full_guides() {
     assert_eq!(flows.len(), g.len());
     for (f, gi) in flows.iter().zip(&g) {
         assert!(*f == gi.flow);
+    }
+}
+
+#[test]
+fn kept_flows_are_not_asked_for_again() {
+    use std::sync::{Arc, Mutex};
+    let n = 9;
+    for (keep, expected) in [(false, 2 * n), (true, n)] {
+        let calls = Arc::new(Mutex::new(0));
+        let c = calls.clone();
+        let stream = GuideStream::builder(&params())
+            .segment_len(4)
+            .keep_flows(keep)
+            .flow_source(move |_| {
+                *c.lock().unwrap() += 1;
+                Ok(Plane::filled(72, 60, Vec2::new(0.5, 0.0)))
+            })
+            .build(n, |i| Ok(frame(i + 4)))
+            .unwrap();
+        assert_eq!(collect(stream).len(), n);
+        assert_eq!(*calls.lock().unwrap(), expected, "flows kept: {keep}");
     }
 }

@@ -72,6 +72,11 @@ fn paint(t: &Seq, keys: &[Keyframe]) -> Vec<KeyedFrame> {
     let params = Params::builder().seed(1).build().unwrap();
     let mut frames = Vec::new();
     let coverage = |k: usize| Ok(t.coverage(k));
+    let reports = std::sync::Mutex::new(Vec::new());
+    let progress = |stage: &str, done: usize, total: usize| {
+        reports.lock().unwrap().push((stage.to_string(), done, total));
+        true
+    };
     keyframes::paint(
         &params,
         t.frames,
@@ -82,9 +87,17 @@ fn paint(t: &Seq, keys: &[Keyframe]) -> Vec<KeyedFrame> {
             frames.push(f);
             Ok(())
         },
-        &mut || {},
+        "keys",
+        &progress,
     )
     .unwrap();
+    // Progress: one unit per frame either pass paints, counted up to the announced total.
+    let total = keyframes::pass_frames(t.frames, keys.iter().map(|k| k.frame));
+    let reports = reports.into_inner().unwrap();
+    assert_eq!(reports.len(), total, "one report per frame painted");
+    for (i, (stage, done, all)) in reports.iter().enumerate() {
+        assert_eq!((stage.as_str(), *done, *all), ("keys", i + 1, total));
+    }
     frames
 }
 

@@ -177,7 +177,7 @@ fn run_keyframes(args: &Args, anim: &anim::Animation, params: fluidymation::synt
         .with_context(|| format!("could not create the output directory '{}'", args.output.display()))?;
     let bars = Bars::new(ctx.quiet);
     let start = Instant::now();
-    let (mut done, mut written) = (0usize, 0usize);
+    let mut written = 0usize;
     let coverage = |k: usize| Ok(anim.render(0, k)?.coverage());
     let mut emit = |j: usize, out: KeyedFrame| -> fluidymation::Result<()> {
         if range.contains(&j) {
@@ -186,19 +186,17 @@ fn run_keyframes(args: &Args, anim: &anim::Animation, params: fluidymation::synt
         }
         Ok(())
     };
-    let mut tick = || {
-        done += 1;
-        bars.update("frames", done, anim.frames.saturating_sub(keys.len()));
-    };
-    keyframes::paint(&params, anim.frames, &coverage, &keys, &mut emit, &mut tick)
+    // The bar counts the frames both passes paint (two per frame between keyframes).
+    keyframes::paint(&params, anim.frames, &coverage, &keys, &mut emit, "frames", &bars)
         .context("painting from the keyframes")?;
+    let synthesized = anim.frames - keys.len();
     bars.clear();
     if !ctx.quiet {
         let secs = start.elapsed().as_secs_f64();
         eprintln!(
             "{written} frames from {} keyframe(s) in {secs:.1} s ({:.2} s/frame synthesized) -> {}",
             keys.len(),
-            secs / done.max(1) as f64,
+            secs / synthesized.max(1) as f64,
             args.output.display()
         );
     }

@@ -54,6 +54,7 @@ pub struct GuideStreamBuilder<'p> {
     segment_len: Option<usize>,
     flow: Option<FlowSource>,
     progress: Option<&'p dyn Progress>,
+    keep_flows: bool,
 }
 
 impl<'p> GuideStreamBuilder<'p> {
@@ -71,6 +72,15 @@ impl<'p> GuideStreamBuilder<'p> {
     /// Default: estimated from the masks.
     pub fn flow_source(mut self, source: impl FnMut(usize) -> Result<Plane<Vec2>> + Send + 'static) -> Self {
         self.flow = Some(Box::new(source));
+        self
+    }
+
+    /// Keeps the flows the backward pass estimates (8 bytes per mask pixel per frame, released as
+    /// the frames are handed out) instead of estimating them a second time in the forward
+    /// iteration: memory then grows with the sequence, so this is for short sequences whose
+    /// frames are held anyway (the passes between painted keyframes). Same results. Default: off.
+    pub fn keep_flows(mut self, keep: bool) -> Self {
+        self.keep_flows = keep;
         self
     }
 
@@ -108,6 +118,7 @@ impl<'p> GuideStreamBuilder<'p> {
             prev_flow: None,
             failed: false,
             extent_scale: 0.0,
+            kept: Vec::new(),
         };
         if n == 0 {
             return Ok(s);
@@ -121,7 +132,11 @@ impl<'p> GuideStreamBuilder<'p> {
         let seg_len = s.seg_len;
         let checkpoints = &mut s.checkpoints;
         let flow = &mut s.flow;
+        let mut kept: Vec<Option<Vec<Vec2>>> = if self.keep_flows { vec![None; n] } else { Vec::new() };
         backward_flows(n, n - 1, 0, &s.params, flow, &mut provider, |j, mask, f| {
+            if let Some(slot) = kept.get_mut(j) {
+                *slot = Some(mask.gather(f));
+            }
             if acc.is_empty() {
                 acc = Plane::new(mask.w, mask.h);
             }
@@ -149,6 +164,7 @@ impl<'p> GuideStreamBuilder<'p> {
             .map(|(i, m)| m.ok_or_else(|| Error::param("frame", i, "a frame read by the backward pass")))
             .collect::<Result<_>>()?;
         s.acc_pos = Plane::new(s.size.0, s.size.1);
+        s.kept = kept;
         s.extent_scale = extents.quantile(EXTENT_QUANTILE);
         Ok(s)
     }
@@ -189,6 +205,8 @@ pub struct GuideStream {
     prev_flow: Option<Crop<Vec2>>,
     failed: bool,
     extent_scale: f32,
+    /// The backward pass's flows at the mask pixels, if kept ([`GuideStreamBuilder::keep_flows`]).
+    kept: Vec<Option<Vec<Vec2>>>,
 }
 
 /// One segment's final flows and `ext−` at the mask pixels of each frame.
@@ -210,7 +228,7 @@ impl GuideStream {
 
     /// A builder with the default options.
     pub fn builder(params: &GuideParams) -> GuideStreamBuilder<'static> {
-        GuideStreamBuilder { params: params.clone(), segment_len: None, flow: None, progress: None }
+        GuideStreamBuilder { params: params.clone(), segment_len: None, flow: None, progress: None, keep_flows: false }
     }
 
     /// Number of frames.
@@ -233,7 +251,7 @@ impl GuideStream {
     /// counting the current segment and the working planes).
     pub fn stored_bytes(&self) -> usize {
         self.masks.iter().map(PackedMask::bytes).sum::<usize>()
-            + self.checkpoints.iter().flatten().map(|c| c.len() * std::mem::size_of::<Vec2>()).sum::<usize>()
+            + self.checkpoints.iter().chain(&self.kept).flatten().map(|c| c.len() * size_of::<Vec2>()).sum::<usize>()
     }
 
     fn mask(&self, i: usize) -> Arc<FrameMask> {
@@ -266,8 +284,13 @@ impl GuideStream {
         let mut flows = Vec::with_capacity(end - start);
         for i in start..end {
             let mask = self.mask(i);
-            let f = self.forward_flow(i, &mask)?;
-            flows.push(mask.gather(&f));
+            match self.kept.get_mut(i).and_then(Option::take) {
+                Some(f) => flows.push(f),
+                None => {
+                    let f = self.forward_flow(i, &mask)?;
+                    flows.push(mask.gather(&f));
+                }
+            }
             masks.push(mask);
         }
         // The checkpoint is used once: free it.

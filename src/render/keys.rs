@@ -16,6 +16,7 @@ use crate::anim::Animation;
 use crate::composite::{self, Background, LayerFrame};
 use crate::error::{Error, Result};
 use crate::img::{self, Plane};
+use crate::progress::Progress;
 use crate::synth::keyframes::{self, KeyedFrame, Keyframe};
 use rayon::prelude::*;
 use std::ops::Range;
@@ -141,13 +142,15 @@ impl KeyedFrames {
 }
 
 /// Paints every painted region's frames (over `range`) from its keyframes, into
-/// `state/keyframes/NN/`; `None` for the others. Regions in parallel.
+/// `state/keyframes/NN/`; `None` for the others. Regions in parallel, each reported to
+/// `progress` as stage `"keys NN name"` (the frames both passes paint).
 pub(crate) fn paint_regions(
     anim: &Animation,
     opts: &RenderOptions,
     range: &Range<usize>,
     keys: &[Vec<Keyframe>],
     state: &std::path::Path,
+    progress: &dyn Progress,
 ) -> Result<Vec<Option<KeyedFrames>>> {
     keys.par_iter()
         .enumerate()
@@ -162,7 +165,8 @@ pub(crate) fn paint_regions(
             let mut emit = |j: usize, out: KeyedFrame| -> Result<()> {
                 super::paint::Paint::from_frame(&out.rgb, &out.mask).save(&dir.join(format!("{:04}.png", j + 1)))
             };
-            keyframes::paint(&opts.params, range.len(), &coverage, keys, &mut emit, &mut || {})?;
+            let stage = format!("keys {}", super::stage_name(anim, region));
+            keyframes::paint(&opts.params, range.len(), &coverage, keys, &mut emit, &stage, progress)?;
             Ok(Some(KeyedFrames { dir }))
         })
         .collect()

@@ -37,7 +37,8 @@
 //! where A's and B's paint meet). Their orientation field and ribbons are not used (the carried
 //! field is the position in the painting; a patch is never turned). The forward pass of one
 //! gap between keyframes is held in memory until the backward pass meets it, with the choice
-//! (17 bytes a pixel a frame).
+//! (17 bytes a pixel a frame), and each pass keeps the flows of its guide stream rather than
+//! estimate them twice (8 bytes a masked pixel a frame, until used).
 
 use super::params::HALF;
 use super::{Params, Source, SynthFrame, Synthesizer};
@@ -45,6 +46,7 @@ use crate::error::{Error, Result};
 use crate::exemplar::{Exemplar, ExemplarMeta};
 use crate::guide::{FrameGuides, GuideStream};
 use crate::img::{Mask, Plane, Rgb};
+use crate::progress::Progress;
 use glam::Vec2;
 
 /// A painted keyframe: the painting of target frame `frame` (0-based), the size of the target's
@@ -119,14 +121,16 @@ pub type Coverage<'a> = &'a (dyn Fn(usize) -> Result<Plane<f32>> + Sync);
 
 /// Paints every frame of a `frames`-frame target from its painted keyframes `keys` (any order;
 /// at least one, at most one per frame) and hands them to `emit` in order, frame index first.
-/// `tick` is called after every frame synthesized, in either pass (for progress).
+/// Reports every frame synthesized, in either pass, to `progress` as one unit of `stage` (of
+/// [`pass_frames`] in all); when it asks to stop, returns [`Error::Cancelled`].
 pub fn paint(
     params: &Params,
     frames: usize,
     coverage: Coverage<'_>,
     keys: &[Keyframe],
     emit: &mut dyn FnMut(usize, KeyedFrame) -> Result<()>,
-    tick: &mut dyn FnMut(),
+    stage: &str,
+    progress: &dyn Progress,
 ) -> Result<()> {
     let mut keys: Vec<&Keyframe> = keys.iter().collect();
     keys.sort_by_key(|k| k.frame);
@@ -141,6 +145,12 @@ pub fn paint(
     if let Some(k) = keys.iter().find(|k| k.frame >= frames) {
         return Err(Error::param("keyframe", k.frame + 1, format!("a frame of the target (1–{frames})")));
     }
+    let total = pass_frames(frames, keys.iter().map(|k| k.frame));
+    let mut done = 0;
+    let mut tick = || -> Result<()> {
+        done += 1;
+        if progress.update(stage, done, total) { Ok(()) } else { Err(Error::Cancelled) }
+    };
     let sources: Vec<Source> = {
         use rayon::prelude::*;
         keys.par_iter().map(|k| key_source(k, &coverage(k.frame)?, params)).collect::<Result<_>>()?
@@ -152,7 +162,7 @@ pub fn paint(
         let seq: Vec<usize> = (0..=first).rev().collect();
         let mut held = Held::new(first);
         pass(&sources[0], params, &seq, guides(&seq, coverage, params)?, &mut |_, _| {}, &mut |j, out| {
-            tick();
+            tick()?;
             held.put(j, out);
             Ok(())
         })?;
@@ -166,7 +176,7 @@ pub fn paint(
             // After the last keyframe: forward from it.
             let seq: Vec<usize> = (key.frame..frames).collect();
             return pass(&sources[a], params, &seq, guides(&seq, coverage, params)?, &mut |_, _| {}, &mut |j, out| {
-                tick();
+                tick()?;
                 emit(j, KeyedFrame { rgb: out.rgb, mask: out.mask })
             });
         };
@@ -189,14 +199,14 @@ pub fn paint(
             s.spawn(|_| stream_b = Some(guides(&seq_b, coverage, params)));
             let stream_a = guides(&seq_a, coverage, params)?;
             pass(&sources[a], params, &seq_a, stream_a, &mut |k, g| split.forward(k, g), &mut |j, out| {
-                tick();
+                tick()?;
                 held.put(j, out);
                 Ok(())
             })
         })?;
         let stream_b = stream_b.ok_or_else(|| Error::param("keyframe pass", "no guides", "the backward pass's"))??;
         pass(&sources[a + 1], params, &seq_b, stream_b, &mut |k, g| split.backward(seq_b[k], g), &mut |j, out| {
-            tick();
+            tick()?;
             let fwd = held.take(j)?;
             held.put_keyed(j, split.merge(j, fwd, out)?);
             Ok(())
@@ -206,6 +216,22 @@ pub fn paint(
         }
     }
     Ok(())
+}
+
+/// How many frames [`paint`] synthesizes for a `frames`-frame target with keyframes at these
+/// (0-based, different) frames: one pass before the first keyframe and one after the last, two
+/// between keyframes (forward and backward) — the units of its progress.
+pub fn pass_frames(frames: usize, keys: impl IntoIterator<Item = usize>) -> usize {
+    let mut keys: Vec<usize> = keys.into_iter().collect();
+    keys.sort_unstable();
+    match (keys.first(), keys.last()) {
+        (Some(&first), Some(&last)) => {
+            first
+                + frames.saturating_sub(last + 1)
+                + keys.windows(2).map(|w| 2 * w[1].saturating_sub(w[0] + 1)).sum::<usize>()
+        }
+        _ => 0,
+    }
 }
 
 /// The keyframe's own output: its painting, with the target's mask.
@@ -241,7 +267,8 @@ impl Held {
 
 /// The guides of the target frames `seq`, in that order.
 fn guides(seq: &[usize], coverage: Coverage<'_>, params: &Params) -> Result<GuideStream> {
-    GuideStream::new(seq.len(), |k| coverage(seq[k]), params.guide())
+    // A pass's frames are held anyway: keep the flows rather than estimate them twice.
+    GuideStream::builder(params.guide()).keep_flows(true).build(seq.len(), |k| coverage(seq[k]))
 }
 
 /// One pass from a keyframe along `seq` (target frame indices; `seq[0]` is the keyframe's),
@@ -500,6 +527,44 @@ fn cell_noise(x: f32, y: f32, seed: u64) -> CellNoise {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn pass_frames_counts_both_passes_between_keys() {
+        assert_eq!(pass_frames(48, [0, 47]), 2 * 46);
+        assert_eq!(pass_frames(48, [47, 0]), 2 * 46);
+        assert_eq!(pass_frames(48, [10]), 10 + 37);
+        // 2 before, none between 2 and 3, 2 × 2 between 3 and 6, 3 after.
+        assert_eq!(pass_frames(10, [2, 3, 6]), 2 + 2 * 2 + 3);
+        assert_eq!(pass_frames(5, std::iter::empty()), 0);
+    }
+
+    #[test]
+    fn a_cancelled_paint_stops_with_cancelled() {
+        let disc = |k: usize| {
+            Plane::from_fn(48, 40, move |x, y| {
+                let (dx, dy) = (x as f32 - 18.0 - k as f32, y as f32 - 20.0);
+                if dx * dx + dy * dy < 100.0 { 1.0 } else { 0.0 }
+            })
+        };
+        let key = Keyframe { frame: 0, painting: Plane::filled(48, 40, [0.3, 0.5, 0.7]), mask: None };
+        let params = Params::builder().seed(1).build().unwrap();
+        let mut emitted = 0;
+        let stop = |_: &str, done: usize, _: usize| done < 2;
+        let r = paint(
+            &params,
+            6,
+            &|k| Ok(disc(k)),
+            &[key],
+            &mut |_, _| {
+                emitted += 1;
+                Ok(())
+            },
+            "keys",
+            &stop,
+        );
+        assert!(matches!(r, Err(Error::Cancelled)), "{r:?}");
+        assert!(emitted <= 2, "stopped at once: {emitted} frames emitted");
+    }
 
     #[test]
     fn cell_noise_is_uniform_and_made_of_blobs() {
