@@ -517,6 +517,11 @@ pub(crate) fn render_with(
     // anything is created or computed; then the output locations, checked before the work.
     let fingerprint = render_fingerprint(anim, opts, &range, &prepared)?;
     let (resumed, done) = open_journal(opts, fingerprint, n)?;
+    let resume = match &resumed {
+        _ if done >= n => keys::Resume::Nothing,
+        Some(_) => keys::Resume::From(done),
+        None => keys::Resume::Start,
+    };
     let layer_dirs = prepare_outputs(anim, opts)?;
     output::remove_stale_temporaries(&opts.out_dir.join(STATE_DIR), None);
     let mut journal = match resumed {
@@ -526,7 +531,7 @@ pub(crate) fn render_with(
     };
     // Layers painted from keyframes: every frame painted first (the backward passes), to the
     // state folder.
-    let keyed = keys::paint_regions(anim, opts, &range, &painted, &opts.out_dir.join(STATE_DIR), progress)?;
+    let keyed = keys::paint_regions(anim, opts, &range, &painted, &opts.out_dir.join(STATE_DIR), resume, progress)?;
 
     let stages: Vec<String> = (0..anim.regions.len()).map(|r| stage_name(anim, r)).collect();
     let mut layers = start_layers(anim, opts, &range, &prepared, done, &keyed)?;

@@ -187,3 +187,57 @@ fn two_keyframes_painting_two_layers_on_two_threads() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// An interrupted render with a painted layer continues with `resume`: the layer's frames,
+/// all painted before the interruption, are reused (no keyframe pass runs again) and the
+/// frames are the same as those of a render that was not interrupted.
+#[test]
+fn a_resumed_render_reuses_the_painted_frames() {
+    let a = demo();
+    let dir = scratch("resume");
+    let key = 23;
+    let flat = frame_of(&a, &dir.join("flat"), "none", key);
+    let styled = frame_of(&a, &dir.join("styled"), "blue-swatch", key);
+    let dress = visible(&a, "dress", key);
+    let painting =
+        Plane::from_fn(
+            flat.width(),
+            flat.height(),
+            |x, y| if dress.get(x, y) { styled.get(x, y) } else { flat.get(x, y) },
+        );
+    let file = dir.join("painted.png");
+    img::save_rgb(&file, &painting).unwrap();
+    let range = 21..27;
+    let options = |out: &Path| {
+        let mut o = RenderOptions::new(out.to_path_buf(), range.clone());
+        o.keyframes = vec![(key, file.clone())];
+        o
+    };
+    let whole = dir.join("whole");
+    render::render(&a, &options(&whole), &NoProgress).unwrap();
+
+    // Stopped after 3 frames are written.
+    let out = dir.join("out");
+    let stop = |stage: &str, done: usize, _: usize| stage != "frames" || done < 3;
+    let e = render::render(&a, &options(&out), &stop).unwrap_err();
+    assert!(matches!(e, Error::Cancelled), "{e}");
+    // Continued: the keyframe passes do not run again.
+    let passes = std::sync::atomic::AtomicUsize::new(0);
+    let count = |stage: &str, _: usize, _: usize| {
+        if stage.starts_with("keys ") {
+            passes.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        }
+        true
+    };
+    let mut resumed = options(&out);
+    resumed.resume = true;
+    let summary = render::render(&a, &resumed, &count).unwrap();
+    assert_eq!(summary.resumed, 3);
+    assert_eq!(passes.into_inner(), 0, "the painted frames were painted again");
+    for k in range {
+        let name = format!("{:04}.png", k + 1);
+        let (x, y) = (img::load_rgb(&out.join(&name)).unwrap(), img::load_rgb(&whole.join(&name)).unwrap());
+        assert!(x == y, "frame {} differs from the uninterrupted render", k + 1);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

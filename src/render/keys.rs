@@ -141,15 +141,31 @@ impl KeyedFrames {
     }
 }
 
+/// Where a render starts, for [`paint_regions`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Resume {
+    /// From the first frame: everything is painted.
+    Start,
+    /// From this frame (0-based within the range), continuing an interrupted render.
+    From(usize),
+    /// Every frame was composited already (only the GIF is left): nothing is painted.
+    Nothing,
+}
+
 /// Paints every painted region's frames (over `range`) from its keyframes, into
 /// `state/keyframes/NN/`; `None` for the others. Regions in parallel, each reported to
 /// `progress` as stage `"keys NN name"` (the frames both passes paint).
+///
+/// `resume`: a render that continues (the same inputs and options, checked by its journal)
+/// reuses a region's frames when they were all painted (`NN/complete` says how many) instead
+/// of painting them again, and paints nothing when no frame is left to composite.
 pub(crate) fn paint_regions(
     anim: &Animation,
     opts: &RenderOptions,
     range: &Range<usize>,
     keys: &[Vec<Keyframe>],
     state: &std::path::Path,
+    resume: Resume,
     progress: &dyn Progress,
 ) -> Result<Vec<Option<KeyedFrames>>> {
     keys.par_iter()
@@ -159,7 +175,17 @@ pub(crate) fn paint_regions(
                 return Ok(None);
             }
             let dir = state.join("keyframes").join(format!("{:02}", region + 1));
+            let complete = dir.join("complete");
+            let reusable = || std::fs::read_to_string(&complete).is_ok_and(|n| n.trim() == range.len().to_string());
+            match resume {
+                Resume::Nothing => return Ok(Some(KeyedFrames { dir })),
+                Resume::From(_) if reusable() => return Ok(Some(KeyedFrames { dir })),
+                _ => {}
+            }
             std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+            if complete.exists() {
+                std::fs::remove_file(&complete).map_err(|e| Error::io(&complete, e))?;
+            }
             let coverage =
                 |k: usize| Ok(target_fill(&anim.render(region, range.start + k)?, opts.strokes).map(|c| c[3]));
             let mut emit = |j: usize, out: KeyedFrame| -> Result<()> {
@@ -167,6 +193,7 @@ pub(crate) fn paint_regions(
             };
             let stage = format!("keys {}", super::stage_name(anim, region));
             keyframes::paint(&opts.params, range.len(), &coverage, keys, &mut emit, &stage, progress)?;
+            img::atomic_write(&complete, |w| write!(w, "{}", range.len()))?;
             Ok(Some(KeyedFrames { dir }))
         })
         .collect()
