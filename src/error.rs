@@ -180,7 +180,7 @@ impl Error {
 }
 
 /// A number for a message: plain, or in scientific notation when very large or small.
-fn number(v: f64) -> String {
+pub(crate) fn number(v: f64) -> String {
     if v != 0.0 && v.is_finite() && !(1e-3..1e9).contains(&v.abs()) { format!("{v:e}") } else { format!("{v}") }
 }
 

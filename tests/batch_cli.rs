@@ -157,6 +157,21 @@ fn batch_errors_before_any_work() {
     let o = run(&[os("render"), q.as_os_str(), d.as_os_str(), os("-o"), out.as_os_str(), os("--gif"), gif.as_os_str()]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("--gif") && stderr(&o).contains("<name>.gif"), "{}", stderr(&o));
+    // `--gif` before the inputs takes the first one as the GIF's name: refused, the input kept.
+    let input = tmp.join("walk.json");
+    std::fs::copy(&d, &input).unwrap();
+    let before = std::fs::read(&input).unwrap();
+    let o = run(&[os("render"), os("--gif"), input.as_os_str(), q.as_os_str(), os("-o"), out.as_os_str()]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("walk.json") && stderr(&o).contains("not a .gif"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&input).unwrap(), before, "the input was overwritten");
+    // An existing file that is not a GIF, under a .gif name.
+    let fake = tmp.join("notes.gif");
+    std::fs::write(&fake, "my notes").unwrap();
+    let o = run(&[os("render"), d.as_os_str(), os("-o"), out.as_os_str(), os("--gif"), fake.as_os_str()]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("not a GIF"), "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(&fake).unwrap(), "my notes");
     // Two inputs that would share a folder.
     let copy = tmp.join("other");
     std::fs::create_dir_all(&copy).unwrap();

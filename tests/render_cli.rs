@@ -660,6 +660,29 @@ fn every_error_is_a_clear_message_and_exit_code_1() {
     // Nothing to resume.
     fails(&tmp, "resume-nothing", &d, &quick(&["--resume"]), &["no interrupted render", "without --resume"]);
 
+    // The output folder is the input's folder of masks: refused, the masks kept.
+    let masks = tmp.join("masks");
+    std::fs::create_dir_all(&masks).unwrap();
+    let disc = image::GrayImage::from_fn(32, 32, |x, y| {
+        image::Luma([if (x as i32 - 16).pow(2) + (y as i32 - 16).pow(2) < 100 { 255 } else { 0 }])
+    });
+    for k in 1..=2 {
+        disc.save(masks.join(format!("{k:04}.png"))).unwrap();
+    }
+    let before = std::fs::read(masks.join("0001.png")).unwrap();
+    for cmd in ["render", "synth"] {
+        let o = if cmd == "render" {
+            render(&masks, &masks, &[])
+        } else {
+            let m = masks.to_str().unwrap();
+            bin().args(["synth", "-e", "ink-rims", "--masks", m, "-o", m]).output().unwrap()
+        };
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{cmd}: {err}");
+        assert!(err.contains("is the input folder") && err.contains("masks"), "{cmd}: {err}");
+        assert_eq!(std::fs::read(masks.join("0001.png")).unwrap(), before, "{cmd} overwrote a mask");
+    }
+
     fails(&tmp, "threads", &d, &quick(&["--threads", "0"]), &["--threads"]);
     fails(&tmp, "scale", &d, &["--scale", "0"], &["scale"]);
 }

@@ -217,9 +217,16 @@ pub fn output_layout(
 ) -> Result<Vec<(PathBuf, Option<PathBuf>)>> {
     let stems: Vec<String> = inputs.iter().map(|i| input_stem(i)).collect();
     let named_gif = gif.flatten();
+    if let Some(g) = named_gif {
+        check_gif_name(g, inputs)?;
+    }
     if inputs.len() == 1 {
+        check_not_input(&inputs[0], out)?;
         let gif = gif.map(|_| named_gif.map_or_else(|| out.join(format!("{}.gif", stems[0])), Path::to_path_buf));
         return Ok(vec![(out.to_path_buf(), gif)]);
+    }
+    for (input, s) in inputs.iter().zip(&stems) {
+        check_not_input(input, &out.join(s))?;
     }
     if let Some(g) = named_gif {
         bail!(
@@ -239,6 +246,57 @@ pub fn output_layout(
         }
     }
     Ok(stems.iter().map(|s| (out.join(s), gif.map(|_| out.join(format!("{s}.gif"))))).collect())
+}
+
+/// A GIF file name given with `--gif FILE` must end in `.gif`, must not be an input, and must
+/// not be an existing file that is not a GIF: `--gif` takes an optional value, so `--gif
+/// walk.json intro.json` reads `walk.json` as the GIF's name, and writing it would destroy the
+/// animation.
+fn check_gif_name(gif: &Path, inputs: &[PathBuf]) -> Result<()> {
+    let is_gif = gif.extension().is_some_and(|e| e.eq_ignore_ascii_case("gif"));
+    // A folder is reported where the GIF is created.
+    if !is_gif && !gif.is_dir() {
+        bail!(
+            "--gif '{}': not a .gif file name. To write OUT_DIR/<name>.gif, give --gif without a file name after \
+             the inputs (or as the last option); to name the GIF, write --gif=FILE.gif",
+            gif.display()
+        );
+    }
+    let same = |i: &PathBuf| i == gif || (i.exists() && gif.exists() && same_file(i, gif));
+    if let Some(i) = inputs.iter().find(|i| same(i)) {
+        bail!("--gif '{}' is the input '{}': it would be overwritten", gif.display(), i.display());
+    }
+    if gif.is_file() {
+        let mut magic = [0u8; 4];
+        let is_gif = std::fs::File::open(gif).and_then(|mut f| std::io::Read::read_exact(&mut f, &mut magic)).is_ok()
+            && &magic == b"GIF8";
+        if !is_gif {
+            bail!("--gif '{}' exists and is not a GIF: not overwriting it", gif.display());
+        }
+    }
+    Ok(())
+}
+
+/// The frames of an input that is a folder (of masks or SVG frames) must not be written into
+/// that folder: they would overwrite its frames.
+pub fn check_not_input(input: &Path, out: &Path) -> Result<()> {
+    // A glob of frames names their folder.
+    let folder = if input.to_string_lossy().contains(['*', '?', '[']) { input.parent() } else { Some(input) };
+    if let Some(folder) = folder.filter(|f| f.is_dir())
+        && (folder == out || same_file(folder, out))
+    {
+        bail!(
+            "the output folder '{}' is the input folder '{}': its frames would be overwritten; choose another -o",
+            out.display(),
+            folder.display()
+        );
+    }
+    Ok(())
+}
+
+/// Whether two existing paths name the same file.
+fn same_file(a: &Path, b: &Path) -> bool {
+    matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y)
 }
 
 /// Loads one input with the scale and precomp options, printing its warnings.

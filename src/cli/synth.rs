@@ -51,6 +51,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     args.threads.apply()?;
     let t0 = Instant::now();
     let params = args.flags.params()?;
+    super::render::check_not_input(&args.masks, &args.output)?;
     let anim = anim::load(&args.masks, &LoadOptions::default().scale(args.flags.target_scale()?))
         .with_context(|| format!("could not read the masks in '{}'", args.masks.display()))?;
     if !args.keyframe.is_empty() {

@@ -646,7 +646,12 @@ impl ParamsBuilder {
         }
         let (ml, mu) = p.schedule.prev_bounds;
         if !(ml.is_finite() && mu.is_finite() && ml >= 0.0 && mu > ml) {
-            return Err(Error::param("prev-modulation-bounds", format!("{},{}", ml, mu), "0 <= m_l < m_u (pixels)"));
+            // Shown as the command line takes it: m_u,m_l.
+            return Err(Error::param(
+                "prev-modulation-bounds",
+                format!("{},{}", mu, ml),
+                "m_u,m_l with 0 <= m_l < m_u (pixels)",
+            ));
         }
         if !(p.schedule.alpha > 0.0 && p.schedule.alpha < 1.0) {
             return Err(Error::param("patchmatch-alpha", p.schedule.alpha, "a number in (0, 1)"));

@@ -35,12 +35,16 @@ pub use render::{Pass, Target, render};
 use super::{
     Animation, Background, LoadOptions, MAX_FRAMES, MAX_SIDE, Region, RegionFrame, RegionKind, RegionRenderer,
 };
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, number};
 use crate::img::{Plane, Rgba};
 use model::{Composition, Content, Shape};
 use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
+
+/// Smallest frame rate accepted (a frame every 100 s; the GIF's delays are hundredths of a
+/// second, at most 655 s).
+pub const MIN_FPS: f64 = 0.01;
 
 /// Largest frame rate accepted.
 pub const MAX_FPS: f64 = 1000.0;
@@ -82,8 +86,11 @@ pub fn parse(path: &Path, text: &str) -> Result<Model> {
             return Err(Error::Limit { path: path.to_path_buf(), what: what.into(), value: v, limit: MAX_SIDE as f64 });
         }
     }
-    if fr <= 0.0 {
-        return Err(Error::animation(path, format!("frame rate 'fr' is {fr}; it must be positive")));
+    if fr < MIN_FPS {
+        return Err(Error::animation(
+            path,
+            format!("frame rate 'fr' is {}; it must be at least {MIN_FPS}", number(fr)),
+        ));
     }
     if fr > MAX_FPS {
         return Err(Error::Limit {
@@ -94,13 +101,20 @@ pub fn parse(path: &Path, text: &str) -> Result<Model> {
         });
     }
     if ip.abs() > 1e9 || op.abs() > 1e9 {
-        return Err(Error::animation(path, format!("'ip' {ip} / 'op' {op} are absurd frame numbers")));
+        return Err(Error::animation(
+            path,
+            format!("'ip' {} / 'op' {} are absurd frame numbers", number(ip), number(op)),
+        ));
     }
     // The model keeps frame numbers in f32: they must differ there too (`op` = 1e-300).
     if op <= ip || op as f32 <= ip as f32 {
         return Err(Error::animation(
             path,
-            format!("end frame 'op' ({op}) is not after the first frame 'ip' ({ip}); the animation has no frames"),
+            format!(
+                "end frame 'op' ({}) is not after the first frame 'ip' ({}); the animation has no frames",
+                number(op),
+                number(ip)
+            ),
         ));
     }
     let frames = (op - ip).ceil();
