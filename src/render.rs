@@ -356,7 +356,7 @@ fn prepare(
             let ex = &exemplars[e];
             let exemplar_border = p.exemplar_border_width(ex);
             let thickness = crate::synth::sequence_thickness(range.len(), |k| {
-                Ok(target_fill(&anim.render(region, range.start + k)?, opts.strokes).map(|c| c[3]))
+                Ok(composite::coverage(&target_fill(&anim.render(region, range.start + k)?, opts.strokes)))
             })?;
             Ok(Some((e, thickness.map_or_else(|| p.clone(), |t| p.fit_to_thickness(t, exemplar_border)))))
         })
@@ -688,7 +688,7 @@ fn paint_layer(
             .zip(out.mask.data())
             .flat_map(|(c, &m)| [q(c[0]), q(c[1]), q(c[2]), if m { 255 } else { 0 }])
             .collect();
-        let cov: Vec<u8> = target_fill(rf, opts.strokes).data().iter().map(|c| q(c[3])).collect();
+        let cov: Vec<u8> = composite::coverage(&target_fill(rf, opts.strokes)).data().iter().map(|&c| q(c)).collect();
         l.kept.push((rgba, cov));
     }
     Ok(Some(layer))
@@ -738,7 +738,7 @@ fn start_layer(
         || Ok(style.source.clone()),
         &style.params,
         range.len(),
-        |k| Ok(target_fill(&anim.render(region, first + k)?, strokes).map(|c| c[3])),
+        |k| Ok(composite::coverage(&target_fill(&anim.render(region, first + k)?, strokes))),
     )
 }
 

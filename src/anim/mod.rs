@@ -165,9 +165,10 @@ pub struct RegionFrame {
 }
 
 impl RegionFrame {
-    /// The coverage mask (the fill's alpha).
+    /// The coverage of the fills by their shapes, whatever their opacity: the alpha divided by
+    /// the layer's opacity there (the largest alpha within 2 px).
     pub fn coverage(&self) -> Plane<f32> {
-        self.fill.map(|c| c[3])
+        crate::composite::coverage(&self.fill)
     }
 }
 

@@ -49,6 +49,11 @@
 //!    first the lift, white paint of opacity λ: `C ← λ + (1 − λ)C`, `A ← λ + (1 − λ)A`; then the
 //!    glaze: `C ← C·T + (1 − A)(T − m)`, `A ← A + (1 − A)(1 − m)` with `m = min_c T_c`.
 //!
+//! 7. Opacity: a layer whose flat rendering is partly transparent (its fill's or its own
+//!    opacity `o`, [`opacity`]) is laid over what is below with alpha `o`, as the flat layer is:
+//!    `T ← 1 − o + o·T` and `λ ← o·λ` (with [`Recolor::Over`] its opacity is multiplied by `o`).
+//!    The engine paints the shape itself ([`coverage`]), whatever `o`.
+//!
 //! On an opaque background (`A = 1`) step 6 is plain glazing, `out = below × T`, so stacked
 //! glazes multiply their transmittances (`out = bg × Π T_k`) and overlaps get darker. Where the
 //! paint has its typical density (`a = 1`) over the bare background, the result is exactly the
@@ -162,6 +167,45 @@ pub fn merge_strokes(fill: &Plane<Rgba>, strokes: Option<&Plane<Rgba>>) -> Plane
         *o = unpremultiply(acc);
     }
     out
+}
+
+/// Radius (pixels) of the neighbourhood whose largest alpha is a layer's opacity ([`opacity`]):
+/// wider than an antialiased edge.
+pub(crate) const OPACITY_RADIUS: usize = 2;
+
+/// A layer's opacity at every pixel, from its flat rendering `flat` (straight RGBA; alpha =
+/// coverage × opacity — the layer's and the fill's, animated or not): the largest alpha within
+/// [`OPACITY_RADIUS`], so that an antialiased edge has the opacity of the paint beside it;
+/// where nothing of the layer is that close, the layer's largest alpha in the frame. A layer
+/// at 40 % opacity is painted with 40 % of the paint (a thinner glaze; see [`recolor_with`]),
+/// not left out because its alpha is under ½, nor painted at full strength.
+pub(crate) fn opacity(flat: &Plane<Rgba>) -> Plane<f32> {
+    let (w, h) = flat.size();
+    let r = OPACITY_RADIUS;
+    let alpha = |x: usize, y: usize| sanitize_alpha(flat.get(x, y)[3]);
+    let rows: Plane<f32> = Plane::par_from_fn(w, h, |x, y| {
+        (x.saturating_sub(r)..(x + r + 1).min(w)).map(|i| alpha(i, y)).fold(0.0, f32::max)
+    });
+    let most = rows.data().iter().copied().fold(0.0, f32::max);
+    Plane::par_from_fn(w, h, |x, y| {
+        let o = (y.saturating_sub(r)..(y + r + 1).min(h)).map(|j| rows.get(x, j)).fold(0.0, f32::max);
+        if o > 0.0 { o } else { most }
+    })
+}
+
+/// A layer's coverage by its shapes, whatever its opacity: the flat rendering's alpha divided
+/// by its [`opacity`] (0–1). The engine's masks are this at ½, so a layer that fades in is
+/// painted from its first visible frame, with the shape it has.
+pub(crate) fn coverage(flat: &Plane<Rgba>) -> Plane<f32> {
+    let o = opacity(flat);
+    Plane::par_from_fn(flat.width(), flat.height(), |x, y| {
+        let (a, o) = (sanitize_alpha(flat.get(x, y)[3]), o.get(x, y));
+        if o > 0.0 { (a / o).min(1.0) } else { 0.0 }
+    })
+}
+
+fn sanitize_alpha(a: f32) -> f32 {
+    if a.is_finite() { a.clamp(0.0, 1.0) } else { 0.0 }
 }
 
 /// Composites `layers` (bottom to top) over `background` into a `width × height` frame of
@@ -328,7 +372,8 @@ fn draw_stylized(layer: &StylizedLayer, y: usize, acc: &mut [[f32; 4]], base: &[
         let a = &mut acc[x];
         match layer.mode {
             Recolor::Glaze => {
-                if p.amount <= 0.0 {
+                let amount = p.amount;
+                if amount <= 0.0 || p.opacity <= 0.0 {
                     continue;
                 }
                 let b = &base[x];
@@ -346,9 +391,12 @@ fn draw_stylized(layer: &StylizedLayer, y: usize, acc: &mut [[f32; 4]], base: &[
                 } else {
                     b.ln_base
                 };
-                let t_at = |i: usize| fast_exp(p.amount * (p.ln[i] - ln_base[i]).min(0.0));
+                // At partial opacity o the glazed layer is laid over what is below with alpha o,
+                // as a flat layer is: T → 1 − o + o·T.
+                let o = p.opacity;
+                let t_at = |i: usize| 1.0 - o + o * fast_exp(amount * (p.ln[i] - ln_base[i]).min(0.0));
                 let t = [t_at(0), t_at(1), t_at(2)];
-                let lift = beta * p.amount.min(1.0);
+                let lift = o * beta * amount.min(1.0);
                 if lift > 0.0 {
                     let k = 1.0 - lift;
                     *a = [lift + k * a[0], lift + k * a[1], lift + k * a[2], lift + k * a[3]];
@@ -356,7 +404,7 @@ fn draw_stylized(layer: &StylizedLayer, y: usize, acc: &mut [[f32; 4]], base: &[
                 glaze(a, t);
             }
             Recolor::Over => {
-                let o = (p.amount * (1.0 / OVER_OPAQUE_AMOUNT)).min(1.0);
+                let o = (p.amount * (1.0 / OVER_OPAQUE_AMOUNT)).min(1.0) * p.opacity;
                 if o <= 0.0 {
                     continue;
                 }
@@ -369,6 +417,7 @@ fn draw_stylized(layer: &StylizedLayer, y: usize, acc: &mut [[f32; 4]], base: &[
                 let k = 1.0 - o;
                 *a = [o * c[0] + k * a[0], o * c[1] + k * a[1], o * c[2] + k * a[2], o + k * a[3]];
             }
+            Recolor::None if p.opacity < 1.0 => glaze(a, p.color.map(|t| 1.0 - p.opacity + p.opacity * t)),
             Recolor::None => glaze(a, p.color),
         }
     }

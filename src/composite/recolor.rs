@@ -126,6 +126,8 @@ pub(crate) struct LayerPixel {
     pub color: Rgb,
     /// `ln max(color, 10⁻⁴)`.
     pub ln: Rgb,
+    /// The layer's opacity here ([`super::opacity`]; 1 for a painted keyframe layer).
+    pub opacity: f32,
 }
 
 /// A synthesized layer ready for [`composite`](super::composite): per pixel inside the
@@ -258,13 +260,15 @@ pub fn recolor_with(
     let grown = mask.bounding_box().filter(|_| mode != Recolor::None).map(|b| b.expand(TINT_MARGIN, w, h));
     let tint = grown.map(|g| (g, extended_tint(flat, mask, g)));
     let paper_lin = rgb_to_linear(pigment.paper());
+    let opacity = super::opacity(flat);
     Ok(layer(mask, mode, |x, y| {
         let c = stylized.get(x, y);
+        let o = opacity.get(x, y);
         match &tint {
-            Some((g, t)) => (pigment.amount(c), t.get(x - g.x0, y - g.y0)),
+            Some((g, t)) => (pigment.amount(c), o, t.get(x - g.x0, y - g.y0)),
             None => {
                 let lin = rgb_to_linear(c);
-                (1.0, [0, 1, 2].map(|i| (lin[i] / paper_lin[i].max(INTENSITY_FLOOR)).min(1.0)))
+                (1.0, o, [0, 1, 2].map(|i| (lin[i] / paper_lin[i].max(INTENSITY_FLOOR)).min(1.0)))
             }
         }
     }))
@@ -275,12 +279,12 @@ pub fn recolor_with(
 pub fn painted(rgb: &Plane<Rgb>, mask: &Mask) -> Result<StylizedLayer> {
     check_size("mask size", mask.size(), rgb.size())?;
     // Amount at the opaque threshold: fully opaque, in the color itself.
-    Ok(layer(mask, Recolor::Over, |x, y| (super::OVER_OPAQUE_AMOUNT, rgb_to_linear(rgb.get(x, y)))))
+    Ok(layer(mask, Recolor::Over, |x, y| (super::OVER_OPAQUE_AMOUNT, 1.0, rgb_to_linear(rgb.get(x, y)))))
 }
 
 /// The layer of the pixels inside `mask` (over its bounding box, rows in parallel), each
-/// `pixel(x, y)` = (pigment amount, linear color).
-fn layer(mask: &Mask, mode: Recolor, pixel: impl Fn(usize, usize) -> (f32, Rgb) + Sync) -> StylizedLayer {
+/// `pixel(x, y)` = (pigment amount, opacity, linear color).
+fn layer(mask: &Mask, mode: Recolor, pixel: impl Fn(usize, usize) -> (f32, f32, Rgb) + Sync) -> StylizedLayer {
     let (w, h) = mask.size();
     let bbox = mask.bounding_box().map_or([0; 4], |b| [b.x0, b.y0, b.x1, b.y1]);
     let [x0, y0, x1, y1] = bbox;
@@ -295,14 +299,14 @@ fn layer(mask: &Mask, mode: Recolor, pixel: impl Fn(usize, usize) -> (f32, Rgb) 
                 if !mask.get(x, y) {
                     continue;
                 }
-                let (amount, color) = pixel(x, y);
+                let (amount, opacity, color) = pixel(x, y);
                 let color = color.map(|v| sanitize(v).max(INTENSITY_FLOOR));
                 let ln = match last {
                     Some((c, ln)) if c == color => ln,
                     _ => [fast_ln(color[0]), fast_ln(color[1]), fast_ln(color[2])],
                 };
                 last = Some((color, ln));
-                *p = LayerPixel { on: true, amount, color, ln };
+                *p = LayerPixel { on: true, amount, color, ln, opacity };
             }
         });
     }

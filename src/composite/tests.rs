@@ -425,3 +425,28 @@ fn pigment_from_colors_finds_the_typical_density() {
         assert!((k[i] - median * BLUE[i]).abs() < 0.02 * BLUE[i] + 1e-3, "{k:?} vs {median} × {BLUE:?}");
     }
 }
+
+/// `opacity` and `coverage` on an antialiased disc drawn at 40 %: the edge has the opacity of
+/// the paint beside it, and the coverage is the disc's at full opacity, everywhere.
+#[test]
+fn opacity_and_coverage_separate_alpha() {
+    let disc = |o: f32| {
+        Plane::from_fn(64, 64, move |x, y| {
+            let d = ((x as f32 - 31.5).powi(2) + (y as f32 - 31.5).powi(2)).sqrt();
+            [0.2, 0.3, 0.9, o * (20.0 - d + 0.5).clamp(0.0, 1.0)]
+        })
+    };
+    let (full, faint) = (disc(1.0), disc(0.4));
+    let o = super::opacity(&faint);
+    let cov = super::coverage(&faint);
+    let reference = super::coverage(&full);
+    for y in 0..64 {
+        for x in 0..64 {
+            if full.get(x, y)[3] > 0.0 {
+                assert!((o.get(x, y) - 0.4).abs() < 1e-6, "opacity at ({x}, {y}): {}", o.get(x, y));
+            }
+            assert!((cov.get(x, y) - reference.get(x, y)).abs() < 1e-5, "coverage at ({x}, {y})");
+        }
+    }
+    assert!((reference.get(31, 31) - 1.0).abs() < 1e-6 && reference.get(0, 0) == 0.0);
+}

@@ -187,7 +187,7 @@ pub(crate) fn paint_regions(
                 std::fs::remove_file(&complete).map_err(|e| Error::io(&complete, e))?;
             }
             let coverage =
-                |k: usize| Ok(target_fill(&anim.render(region, range.start + k)?, opts.strokes).map(|c| c[3]));
+                |k: usize| Ok(composite::coverage(&target_fill(&anim.render(region, range.start + k)?, opts.strokes)));
             let mut emit = |j: usize, out: KeyedFrame| -> Result<()> {
                 super::paint::Paint::from_frame(&out.rgb, &out.mask).save(&dir.join(format!("{:04}.png", j + 1)))
             };
