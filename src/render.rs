@@ -718,7 +718,7 @@ fn summarize(
                     Some(_) => Some(KEYFRAMES_STYLE.to_string()),
                     None => l.style.map(|s| styles[s].name.clone()),
                 },
-                seconds: l.seconds,
+                seconds: l.seconds + keyed[l.region].as_ref().map_or(0.0, |k| k.seconds),
                 eval,
             })
         })

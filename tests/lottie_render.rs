@@ -281,6 +281,9 @@ fn errors_name_the_problem() {
     assert!(msg(r#"{"w": 10, "h": 10, "fr": 30, "ip": 0, "op": 200000, "layers": []}"#).contains("at most 100000"));
     assert!(msg(r#"{"w": 10, "h": 10, "fr": 30, "ip": 5, "op": 5, "layers": []}"#).contains("no frames"));
     assert!(msg(r#"{"w": 10, "h": 10, "fr": -1, "op": 5, "layers": []}"#).contains("at least 0.01"));
+    // Valid JSON, but not an object.
+    let arr = msg("[1, 2, 3]");
+    assert!(arr.contains("not a Lottie file") && arr.contains("JSON object"), "{arr}");
     // Positive but no usable frame rate: refused up front, naming the file's value.
     let tiny = msg(r#"{"w": 10, "h": 10, "fr": 1e-300, "op": 5, "layers": []}"#);
     assert!(tiny.contains("1e-300") && tiny.contains("at least 0.01"), "{tiny}");

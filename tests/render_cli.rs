@@ -655,7 +655,8 @@ fn every_error_is_a_clear_message_and_exit_code_1() {
     let range = ["--scale", "0.25", "--frames"];
     fails(&tmp, "frames-after", &d, &[&range[..], &["49..60"]].concat(), &["49..60", "only 48 frames"]);
     fails(&tmp, "frames-zero", &d, &[&range[..], &["0..3"]].concat(), &["--frames '0..3'", "1-based"]);
-    fails(&tmp, "frames-reversed", &d, &[&range[..], &["5..3"]].concat(), &["--frames '5..3'"]);
+    fails(&tmp, "frames-reversed", &d, &[&range[..], &["5..3"]].concat(), &["--frames '5..3'", "must not come after"]);
+    fails(&tmp, "frames-open-after", &d, &[&range[..], &["99.."]].concat(), &["--frames '99..'", "only 48 frames"]);
 
     // Nothing to resume.
     fails(&tmp, "resume-nothing", &d, &quick(&["--resume"]), &["no interrupted render", "without --resume"]);

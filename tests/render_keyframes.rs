@@ -100,7 +100,10 @@ fn a_painted_layer_follows_its_painting_and_the_others_keep_their_style() {
     let mut bad = RenderOptions::new(dir.join("bad"), 19..28);
     bad.keyframes = vec![(key, small.clone())];
     let e = render::render(&a, &bad, &NoProgress).unwrap_err().to_string();
-    assert!(e.contains("small.png") && e.contains("10"), "{e}");
+    assert!(
+        e.contains("small.png") && e.contains("10x10") && e.contains("keyframe") && e.contains("the animation"),
+        "{e}"
+    );
     bad.keyframes = vec![(40, file.clone())];
     let e = render::render(&a, &bad, &NoProgress).unwrap_err();
     assert!(matches!(e, Error::InvalidParam { .. }) && e.to_string().contains("41"), "{e}");

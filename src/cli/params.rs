@@ -269,12 +269,15 @@ pub fn parse_frames(spec: Option<&str>, total: usize) -> Result<std::ops::Range<
         None => (spec.trim(), spec.trim()),
     };
     let a: usize = if a.is_empty() { 1 } else { a.parse().map_err(|_| bad())? };
-    let b: usize = if b.is_empty() { total } else { b.parse().map_err(|_| bad())? };
-    if a == 0 || b < a {
-        return Err(bad());
+    let b: usize = if b.is_empty() { total.max(a) } else { b.parse().map_err(|_| bad())? };
+    if a == 0 {
+        bail!("--frames '{}': frames are numbered from 1 (1-based, inclusive), e.g. 1..24", spec);
     }
     if a > total {
         bail!("--frames '{}': the input has only {} frames", spec, total);
+    }
+    if b < a {
+        bail!("--frames '{}': the first frame must not come after the last (A..B with A ≤ B), e.g. {b}..{a}", spec);
     }
     Ok(a - 1..b.min(total))
 }

@@ -408,8 +408,9 @@ pub fn file_options(
                 && (0..3).all(|i| (r.color[i] - p[i]).abs() < 0.02)
             {
                 log::warn!(
-                    "layer '{}' has the background's color: a glaze of it does not show; \
+                    "{}: layer '{}' has the background's color: a glaze of it does not show; \
                      try --recolor none (the exemplar's colors) or another --background",
+                    input.display(),
                     r.name
                 );
             }
@@ -421,13 +422,48 @@ pub fn file_options(
     Ok(opts)
 }
 
+/// Warns when `dir` holds frames (`NNNN.png`) outside the range just rendered: left by an
+/// earlier render of other frames, they would be mistaken for part of this one (they are not
+/// removed: they may be wanted).
+fn warn_stale_frames(dir: &Path, range: &std::ops::Range<usize>) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    let mut stale: Vec<usize> = entries
+        .flatten()
+        .filter_map(|e| {
+            let name = e.file_name().into_string().ok()?;
+            let n = name.strip_suffix(".png")?;
+            (n.len() >= 4 && n.bytes().all(|b| b.is_ascii_digit())).then(|| n.parse::<usize>().ok()).flatten()
+        })
+        .filter(|&n| n == 0 || !range.contains(&(n - 1)))
+        .collect();
+    stale.sort_unstable();
+    if let (Some(first), Some(last)) = (stale.first(), stale.last()) {
+        log::warn!(
+            "'{}' also holds {} frame(s) from an earlier render ({first:04}.png–{last:04}.png), outside the frames \
+             rendered now ({}–{}); remove them if they are not wanted",
+            dir.display(),
+            stale.len(),
+            range.start + 1,
+            range.end
+        );
+    }
+}
+
 /// Checks the options every command that renders shares, before any input is read.
 pub fn check_args(args: &RenderArgs) -> Result<Option<Styles>> {
     if args.flags.target_scale.is_some() {
         bail!("--target-scale is for `synth`; use --scale with `render`");
     }
     args.flags.params()?;
-    style_flags(args)?;
+    if !(args.scale > 0.0 && args.scale <= 16.0) {
+        bail!("--scale {}: expected a number in (0, 16] (0.5 = a half-size preview)", args.scale);
+    }
+    let styles = style_flags(args)?;
+    for (i, (layer, ex)) in styles.iter().enumerate() {
+        if let Some((_, later)) = styles[i + 1..].iter().find(|(l, _)| l == layer) {
+            log::warn!("--style {layer}={ex} is overridden by a later --style {layer}={later}");
+        }
+    }
     args.styles.as_deref().map(Styles::read).transpose()
 }
 
@@ -515,6 +551,7 @@ fn run_one(
         }
         Err(e) => return Err(anyhow::Error::new(e).context(format!("could not render '{}'", input.display()))),
     };
+    warn_stale_frames(&opts.out_dir, &opts.frames);
     if !ctx.quiet {
         eprintln!("{}", summary_line(&summary));
         for l in &summary.layers {

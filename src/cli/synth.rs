@@ -123,12 +123,14 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
         bail!("no frame was synthesized");
     }
     if !ctx.quiet {
+        // The whole command; per frame, the frames after the preparation.
         let secs = start.elapsed().as_secs_f64();
         eprintln!(
-            "{} frames in {:.1} s ({:.2} s/frame) -> {}",
+            "{} frames in {:.1} s ({:.2} s/frame after {:.1} s of preparation) -> {}",
             written,
-            secs,
+            t0.elapsed().as_secs_f64(),
             secs / written as f64,
+            (time.read + time.prepare).as_secs_f64(),
             args.output.display()
         );
         let s = |d: Duration| d.as_secs_f64();

@@ -216,8 +216,11 @@ impl Exemplar {
     /// offending file.
     pub fn load(dir: &Path) -> Result<Exemplar> {
         let toml_path = dir.join("exemplar.toml");
+        if !dir.exists() {
+            return Err(Error::exemplar(dir, "no such file or folder"));
+        }
         if !dir.is_dir() {
-            return Err(Error::exemplar(dir, "not a folder"));
+            return Err(Error::exemplar(dir, "is a file, neither an exemplar folder nor a PNG or JPEG image"));
         }
         if !toml_path.is_file() {
             return Err(Error::exemplar(dir, "has no exemplar.toml; is this an exemplar folder?"));

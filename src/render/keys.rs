@@ -60,11 +60,16 @@ pub(crate) fn painted_regions(
             painting = img::resize_bilinear(&painting, w, h);
         }
         if painting.size() != (w, h) {
-            return Err(Error::SizeMismatch {
-                path: path.clone(),
-                expected: (w as u32, h as u32),
-                found: (painting.width() as u32, painting.height() as u32),
-            });
+            let sizes = if anim.scale() != 1.0 {
+                format!("{}x{} (the animation) or {w}x{h} (at --scale {})", full.0, full.1, anim.scale())
+            } else {
+                format!("{w}x{h}, the animation's size")
+            };
+            return Err(Error::param(
+                "keyframe",
+                format!("{} ('{}', {}x{})", frame + 1, path.display(), painting.width(), painting.height()),
+                format!("a painting of {sizes}"),
+            ));
         }
         let regions: Vec<_> = (0..anim.regions.len()).map(|r| anim.render(r, *frame)).collect::<Result<_>>()?;
         // Regions are listed top-most first; composite bottom to top.
@@ -127,6 +132,8 @@ pub(crate) fn painted_regions(
 /// so that a long render does not hold them in memory.
 pub(crate) struct KeyedFrames {
     dir: std::path::PathBuf,
+    /// Seconds spent painting them in this run (0 when reused).
+    pub(crate) seconds: f64,
 }
 
 impl KeyedFrames {
@@ -178,8 +185,8 @@ pub(crate) fn paint_regions(
             let complete = dir.join("complete");
             let reusable = || std::fs::read_to_string(&complete).is_ok_and(|n| n.trim() == range.len().to_string());
             match resume {
-                Resume::Nothing => return Ok(Some(KeyedFrames { dir })),
-                Resume::From(_) if reusable() => return Ok(Some(KeyedFrames { dir })),
+                Resume::Nothing => return Ok(Some(KeyedFrames { dir, seconds: 0.0 })),
+                Resume::From(_) if reusable() => return Ok(Some(KeyedFrames { dir, seconds: 0.0 })),
                 _ => {}
             }
             std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
@@ -192,9 +199,11 @@ pub(crate) fn paint_regions(
                 super::paint::Paint::from_frame(&out.rgb, &out.mask).save(&dir.join(format!("{:04}.png", j + 1)))
             };
             let stage = format!("keys {}", super::stage_name(anim, region));
+            let t0 = std::time::Instant::now();
             keyframes::paint(&opts.params, range.len(), &coverage, keys, &mut emit, &stage, progress)?;
+            let seconds = t0.elapsed().as_secs_f64();
             img::atomic_write(&complete, |w| write!(w, "{}", range.len()))?;
-            Ok(Some(KeyedFrames { dir }))
+            Ok(Some(KeyedFrames { dir, seconds }))
         })
         .collect()
 }

@@ -54,6 +54,15 @@ pub fn parse(path: &Path, text: &str) -> Result<Model> {
     if text.trim().is_empty() {
         return Err(Error::Empty { path: path.to_path_buf(), what: "the file is empty".into() });
     }
+    // A Lottie file is one JSON object; anything else (an array, a number) would be reported in
+    // the deserializer's own terms.
+    let first = text.trim_start().chars().next();
+    if first.is_some_and(|c| c != '{') && serde_json::from_str::<serde::de::IgnoredAny>(text).is_ok() {
+        return Err(Error::animation(
+            path,
+            "not a Lottie file: its top level is not a JSON object; re-export it with Bodymovin",
+        ));
+    }
     let root: schema::Root = serde_json::from_str(text).map_err(|e| Error::Json {
         path: path.to_path_buf(),
         line: e.line(),

@@ -720,8 +720,9 @@ impl Builder<'_> {
             if let Some(p) = src.parent {
                 match by_ind.get(&(p as i64)) {
                     Some(&pi) if pi != i => out[i].parent = Some(pi),
-                    _ => {
-                        let msg = format!("layer '{}': parent {} does not exist; ignored", out[i].name, p);
+                    found => {
+                        let what = if found.is_some() { "is the layer itself" } else { "does not exist" };
+                        let msg = format!("layer '{}': parent {} {what}; ignored", out[i].name, p);
                         log::warn!("{msg}");
                         out[i].warnings.push(msg);
                     }
