@@ -65,5 +65,14 @@ fn import_errors_are_clear() {
     assert!(e.contains("crop") && e.contains("40x40"), "{e}");
     let opts = ImportOptions::default().name("../evil");
     assert!(import(&dir, &opts, &NoProgress).is_err());
+    // Paint to every edge, no paper: refused (it took the paint for paper and made noise).
+    let wash = fluidymation::img::Plane::from_fn(40, 40, |x, y| {
+        let n = ((x * 7 + y * 13) % 5) as f32 * 0.01;
+        [0.19 + n, 0.27 + n, 0.54 + n]
+    });
+    let full = dir.join("wash.png");
+    fluidymation::img::save_rgb(&full, &wash).unwrap();
+    let e = import(&full, &ImportOptions::default(), &NoProgress).unwrap_err().to_string();
+    assert!(e.contains("wash.png") && e.contains("paper") && e.contains("--crop"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -837,3 +837,23 @@ fn keyframe_renders_resume_to_the_same_bytes() {
     assert_eq!(tree(&out), tree(&full), "same files, no temporary or state files left");
     assert!(png_bytes(&out) == png_bytes(&full), "resumed frames differ from the uninterrupted render");
 }
+
+/// A loader's warning (here: an unsupported blend mode) is printed once, naming the file and the
+/// layer once each. It was printed twice, once without the file and once with the layer twice.
+#[test]
+fn warnings_are_printed_once_with_the_file() {
+    let tmp = Scratch::new("warn-once");
+    let json = r#"{"v": "5.5.2", "fr": 10, "ip": 0, "op": 2, "w": 40, "h": 40, "layers": [
+      {"ty": 4, "nm": "tinted", "ind": 1, "ip": 0, "op": 2, "st": 0, "bm": 1,
+       "ks": {"o": {"a": 0, "k": 100}, "p": {"a": 0, "k": [0, 0]}, "a": {"a": 0, "k": [0, 0]}, "s": {"a": 0, "k": [100, 100]}, "r": {"a": 0, "k": 0}},
+       "shapes": [{"ty": "rc", "p": {"a": 0, "k": [20, 20]}, "s": {"a": 0, "k": [20, 20]}, "r": {"a": 0, "k": 0}},
+                  {"ty": "fl", "c": {"a": 0, "k": [0.2, 0.4, 0.8, 1]}, "o": {"a": 0, "k": 100}}]}]}"#;
+    let input = tmp.join("blend.json");
+    std::fs::write(&input, json).unwrap();
+    let o = render(&input, &tmp.join("out"), &["-e", "none"]);
+    assert_success(&o);
+    let err = stderr(&o);
+    let lines: Vec<&str> = err.lines().filter(|l| l.contains("blend mode")).collect();
+    assert_eq!(lines.len(), 1, "{err}");
+    assert!(lines[0].contains("blend.json") && lines[0].matches("layer 'tinted'").count() == 1, "{err}");
+}

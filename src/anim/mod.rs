@@ -116,7 +116,8 @@ pub struct Region {
     pub kind: RegionKind,
     /// Frames (0-based, 0 = the composition's first frame) in which the region is visible.
     pub visible: Range<usize>,
-    /// Dominant fill color (area-weighted), straight RGBA in `0..=1`, for display.
+    /// Dominant fill color (area-weighted), straight RGBA in `0..=1`, for display; transparent
+    /// white when the region draws nothing where it was sampled (hidden, empty, text).
     pub color: Rgba,
     /// True when the region draws strokes (reported separately in [`RegionFrame::strokes`]).
     pub has_strokes: bool,

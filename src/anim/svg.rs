@@ -454,12 +454,10 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
     let mut warnings = Vec::new();
     if any_text {
         let msg = "SVG text is not rendered (no fonts are loaded); convert text to paths".to_string();
-        log::warn!("{}: {msg}", input.display());
         warnings.push(msg);
     }
     if any_filter {
         let msg = "SVG filters (blur, shadows, …) are not drawn; ignored".to_string();
-        log::warn!("{}: {msg}", input.display());
         warnings.push(msg);
     }
     let names: Vec<String> = order.into_iter().rev().collect();
@@ -482,7 +480,7 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
                 name: name.clone(),
                 kind: if name == ROOT_LAYER { RegionKind::SvgRoot } else { RegionKind::SvgGroup },
                 // The dominant color of its first visible frame.
-                color: renderer.dominant_color(i, visible.start).unwrap_or([1.0, 1.0, 1.0, 1.0]),
+                color: renderer.dominant_color(i, visible.start).unwrap_or([1.0, 1.0, 1.0, 0.0]),
                 visible,
                 has_strokes: renderer.strokes[i],
                 warnings,

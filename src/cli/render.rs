@@ -303,15 +303,26 @@ fn same_file(a: &Path, b: &Path) -> bool {
 pub fn load_input(input: &Path, args: &RenderArgs) -> Result<Animation> {
     let load = LoadOptions::default().scale(args.scale).split_precomps(args.split_precomps);
     let anim = anim::load(input, &load).with_context(|| format!("could not load '{}'", input.display()))?;
+    print_warnings(input, &anim);
+    Ok(anim)
+}
+
+/// Prints what the loader found wrong with `input` (unsupported features and the like), once
+/// each, naming the file and the layer.
+pub fn print_warnings(input: &Path, anim: &Animation) {
     for w in &anim.warnings {
         log::warn!("{}: {}", input.display(), w);
     }
     for r in &anim.regions {
         for w in &r.warnings {
-            log::warn!("{}: layer '{}': {}", input.display(), r.name, w);
+            // Lottie's name their layer already.
+            if w.starts_with("layer '") {
+                log::warn!("{}: {}", input.display(), w);
+            } else {
+                log::warn!("{}: layer '{}': {}", input.display(), r.name, w);
+            }
         }
     }
-    Ok(anim)
 }
 
 /// Parses `--style LAYER=EXEMPLAR` values.
@@ -405,6 +416,7 @@ pub fn file_options(
             let flat = style.or(opts.default_style.as_ref()).is_some_and(|e| *e == Style::None);
             if let Some(p) = paper
                 && !flat
+                && r.color[3] > 0.0
                 && (0..3).all(|i| (r.color[i] - p[i]).abs() < 0.02)
             {
                 log::warn!(

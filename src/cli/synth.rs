@@ -54,6 +54,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     super::render::check_not_input(&args.masks, &args.output)?;
     let anim = anim::load(&args.masks, &LoadOptions::default().scale(args.flags.target_scale()?))
         .with_context(|| format!("could not read the masks in '{}'", args.masks.display()))?;
+    super::render::print_warnings(&args.masks, &anim);
     if !args.keyframe.is_empty() {
         if let Some(e) = &args.exemplar {
             log::warn!("--exemplar '{e}' is not used: with --keyframe every frame is painted from the keyframes");

@@ -48,6 +48,16 @@ impl Background {
         if src.is_empty() {
             return Err(fail("the image has no pixels".to_string()));
         }
+        let enlarged = (width as f32 / src.width() as f32).max(height as f32 / src.height() as f32);
+        if enlarged > 2.0 {
+            log::warn!(
+                "'{}': the background image ({}x{}) is enlarged {enlarged:.1}x to cover the {width}x{height} canvas; \
+                 it will look blurred",
+                path.display(),
+                src.width(),
+                src.height()
+            );
+        }
         Ok(Background::Image(cover(&src, width, height)))
     }
 

@@ -38,7 +38,9 @@
 //!    (rather than taking, say, the luminance density) weighs the channels by how much the
 //!    pigment absorbs in them, so a yellow pigment (absorbing only blue, nearly invisible in
 //!    luminance) is measured as well as a blue one, with the best signal-to-noise ratio.
-//! 3. Tint `F` (linear): the flat rendering at that pixel, extended past its coverage.
+//! 3. Tint `F` (linear): the flat rendering at that pixel, extended past its coverage, each
+//!    channel at least [`recolor::TINT_FLOOR`] (0.01): a channel at 0 would hide the paint's
+//!    texture in it entirely (`0^a = 0`), which leaves pure colors flat.
 //! 4. Base `B` (linear): the background at that pixel (white for a transparent background).
 //!    Lift `β = max_c (F_c − B_c)/(1 − B_c)` over channels with `F_c > B_c`, clamped to
 //!    `0..=1` (0 whenever `F ≤ B`, e.g. always on white paper); lifted base
@@ -131,7 +133,8 @@ pub enum LayerPaint<'a> {
 pub struct LayerFrame<'a> {
     /// The layer's paint.
     pub paint: LayerPaint<'a>,
-    /// The layer's strokes (straight sRGB RGBA), drawn over it with [`StrokeMode::Keep`].
+    /// The layer's strokes (straight sRGB RGBA), drawn over it with [`StrokeMode::Keep`] (and
+    /// over a flat layer with [`StrokeMode::Stylize`]).
     pub strokes: Option<&'a Plane<Rgba>>,
 }
 
@@ -272,7 +275,10 @@ pub(crate) fn composite_unchecked(
                 LayerPaint::Stylized(l) => draw_stylized(l, y, &mut acc, &base, &mut touched),
                 LayerPaint::Flat(p) => draw_flat(p.row(y), &mut acc, &mut touched),
             }
-            if strokes == StrokeMode::Keep
+            // A flat layer with `Stylize` is its fill and strokes merged, which is the same as
+            // the strokes drawn over the fill.
+            let flat = matches!(layer.paint, LayerPaint::Flat(_));
+            if (strokes == StrokeMode::Keep || (flat && strokes == StrokeMode::Stylize))
                 && let Some(s) = layer.strokes
             {
                 draw_flat(s.row(y), &mut acc, &mut touched);

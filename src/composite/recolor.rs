@@ -10,6 +10,13 @@ use rayon::prelude::*;
 
 /// Floor of linear-light intensities before taking logarithms (density ≤ ln 10⁴ ≈ 9.2).
 pub const INTENSITY_FLOOR: f32 = 1e-4;
+/// Floor of a tint's linear channels in [`Recolor::Glaze`] and [`Recolor::Over`] (sRGB ≈ 25/255):
+/// the transmittance of the layer's color at the typical density. A channel at 0 (pure
+/// colors: #ff00ff, #0000ff, black) would absorb everything at any amount of paint, `0^a = 0`,
+/// and the paint's texture would not show in it at all; with the floor it shows as in any
+/// other color (`0.01^a`: 0.10 at half the typical density, 0.0001 at twice), and the typical
+/// density gives #ff19ff for #ff00ff — what a watercolor can reach.
+pub const TINT_FLOOR: f32 = 0.01;
 /// Largest pigment amount `a` kept (a multiple of the reference density).
 pub const MAX_AMOUNT: f32 = 8.0;
 /// Smallest mean reference density; exemplars lighter than this (no paint at all) are
@@ -265,7 +272,7 @@ pub fn recolor_with(
         let c = stylized.get(x, y);
         let o = opacity.get(x, y);
         match &tint {
-            Some((g, t)) => (pigment.amount(c), o, t.get(x - g.x0, y - g.y0)),
+            Some((g, t)) => (pigment.amount(c), o, t.get(x - g.x0, y - g.y0).map(|v| v.max(TINT_FLOOR))),
             None => {
                 let lin = rgb_to_linear(c);
                 (1.0, o, [0, 1, 2].map(|i| (lin[i] / paper_lin[i].max(INTENSITY_FLOOR)).min(1.0)))

@@ -310,7 +310,10 @@ fn over_at_full_density_is_the_flat_color() {
     let k = [1.2, 0.9, 0.4];
     let rgb = Plane::filled(W, H, paint(1.0, k));
     let mask = Plane::filled(W, H, true);
-    let flat = Plane::from_fn(W, H, |x, y| [x as f32 / W as f32, y as f32 / H as f32, 0.5, 1.0]);
+    // Channels at or above the tint floor (linear 0.01, sRGB 0.0998): below it see
+    // `pure_colors_show_the_paint`.
+    let ramp = |t: f32| 0.1 + 0.9 * t;
+    let flat = Plane::from_fn(W, H, |x, y| [ramp(x as f32 / W as f32), ramp(y as f32 / H as f32), 0.5, 1.0]);
     let pigment = Pigment::new(PAPER, k);
     for mode in [Recolor::Over, Recolor::Glaze] {
         let layer = recolor_with(&rgb, &mask, &flat, &pigment, mode).unwrap();
@@ -371,6 +374,9 @@ fn flat_layers_and_strokes() {
     let drop = composite::composite(W, H, &bg, &layers, StrokeMode::Drop).unwrap();
     assert_eq!(keep.get(48, 5), [0.0, 0.0, 0.0, 1.0]);
     assert_eq!(drop.get(48, 5), [1.0; 4]);
+    // A flat layer under `Stylize` keeps its strokes (merged with the fill): the same as `Keep`.
+    let stylize = composite::composite(W, H, &bg, &layers, StrokeMode::Stylize).unwrap();
+    assert!(stylize == keep, "a flat layer's strokes were dropped under Stylize");
     let c = drop.get(40, 48);
     assert!((0..3).all(|i| (c[i] - GREEN[i]).abs() < 1.0 / 255.0), "{c:?}");
     let merged = composite::merge_strokes(&fill, Some(&strokes));
@@ -449,4 +455,23 @@ fn opacity_and_coverage_separate_alpha() {
         }
     }
     assert!((reference.get(31, 31) - 1.0).abs() < 1e-6 && reference.get(0, 0) == 0.0);
+}
+
+/// A pure color (#ff00ff: a channel at 0) shows the paint's texture: its zero channel is
+/// floored at [`super::recolor::TINT_FLOOR`], so thinner paint lets it through. Before, the
+/// painted layer was exactly the flat color wherever the paint was more than a fifth of its
+/// typical density.
+#[test]
+fn pure_colors_show_the_paint() {
+    let k = [1.2, 0.9, 0.4];
+    let rgb = Plane::from_fn(W, H, |x, _| paint(0.5 + x as f32 / W as f32, k));
+    let mask = Plane::filled(W, H, true);
+    let flat = Plane::filled(W, H, [1.0, 0.0, 1.0, 1.0]);
+    let layer = recolor_with(&rgb, &mask, &flat, &Pigment::new(PAPER, k), Recolor::Glaze).unwrap();
+    let out = composite_one(&layer, &white());
+    let g: Vec<f32> = out.data().iter().map(|c| c[1]).collect();
+    let (lo, hi) = g.iter().fold((1.0f32, 0.0f32), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+    // a = 0.5 → 0.01^0.5 = 0.1 linear (sRGB 0.35); a = 1.5 → 0.001 (sRGB 0.013).
+    assert!(hi > 0.3 && lo < 0.05, "the green channel spans {lo:.3}–{hi:.3}");
+    assert!(out.data().iter().all(|c| c[0] > 0.99 && c[2] > 0.99), "red and blue stay full");
 }

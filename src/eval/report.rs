@@ -235,13 +235,19 @@ impl fmt::Display for Report {
         };
         row(f, "metric", "output".into(), "exemplar".into(), "ratio".into(), "reading")?;
         row(f, "coverage IoU", num(s.coverage_iou), String::new(), String::new(), "1 = painted area is the target")?;
+        // The exemplar's contrast at the output's depths (what the ratio divides by); its whole
+        // interior's is in the JSON (`contrast_ratio_whole`).
+        let at_depths = match (s.local_contrast, s.contrast_ratio) {
+            (Some(c), Some(r)) if r > 0.0 => Some(c / r),
+            _ => e.local_contrast,
+        };
         row(
             f,
             "local contrast (7x7 luma std)",
             num(s.local_contrast),
-            num(e.local_contrast),
+            num(at_depths),
             num(s.contrast_ratio),
-            "ratio ~1; ~0 is wash-out",
+            "ratio ~1; ~0 is wash-out (exemplar at the same depths)",
         )?;
         let channels =
             s.palette_distance.map(|p| format!(" (R {:.4}, G {:.4}, B {:.4})", p[0], p[1], p[2])).unwrap_or_default();

@@ -236,7 +236,13 @@ pub fn from_frames(frames: Vec<Plane<Rgb>>, files: &[PathBuf], opts: &ImportOpti
         return Err(Error::param("fps", opts.fps, "0.01–1000"));
     }
     let label = |i: usize| files.get(i).cloned().unwrap_or_else(|| PathBuf::from(format!("frame {}", i + 1)));
-    let (masks, report) = extract_masks(&frames, opts)?;
+    let (masks, report) = extract_masks(&frames, opts).map_err(|e| match e {
+        // Named by the first frame: the paper is estimated from all of them.
+        Error::InvalidParam { name, value, allowed } if name == "paper" => {
+            Error::Exemplar { path: label(0), message: format!("no bare paper found: {value}; expected {allowed}") }
+        }
+        other => other,
+    })?;
     for (i, m) in masks.iter().enumerate() {
         if !m.data().iter().any(|&v| v >= 0.5) {
             return Err(Error::Exemplar {
@@ -348,6 +354,9 @@ pub fn otsu(values: &[f32], hi: f32) -> f32 {
     (best_t as f32 + 1.0) / BINS as f32 * hi
 }
 
+/// Darkest paper accepted (sRGB luminance of the estimated paper color).
+pub const MIN_PAPER_LUMA: f32 = 0.35;
+
 /// Extracts the masks of prepared frames (steps 2–5 of the module docs).
 pub fn extract_masks(frames: &[Plane<Rgb>], opts: &ImportOptions) -> Result<(Vec<Plane<f32>>, MaskReport)> {
     let Some(first) = frames.first() else {
@@ -355,6 +364,19 @@ pub fn extract_masks(frames: &[Plane<Rgb>], opts: &ImportOptions) -> Result<(Vec
     };
     let (w, h) = first.size();
     let paper = estimate_paper(frames);
+    // Paint darkens paper (Beer–Lambert): the brightest of the frames' edges must be paper, and
+    // paper is light. A frame filled with paint to its edges has none to key out.
+    let light = 0.2126 * paper[0] + 0.7152 * paper[1] + 0.0722 * paper[2];
+    if light < MIN_PAPER_LUMA {
+        return Err(Error::param(
+            "paper",
+            format!("{} (luminance {light:.2}, the brightest pixels along the frames' edges)", super::hex_color(paper)),
+            format!(
+                "bare, light paper (luminance ≥ {MIN_PAPER_LUMA}) along the edges of the frames: the paint must not \
+                 fill them; crop to a part with paper around the paint (--crop)"
+            ),
+        ));
+    }
     let raw: Vec<Plane<f32>> = frames.iter().map(|f| f.map(|c| measure(c, paper))).collect();
     let measures: Vec<Plane<f32>> = raw.iter().map(|m| img::gaussian_blur(m, 1.0)).collect();
     // Paper noise level from the edge rings, on the unblurred measure (the low threshold is

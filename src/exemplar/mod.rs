@@ -223,7 +223,11 @@ impl Exemplar {
             return Err(Error::exemplar(dir, "is a file, neither an exemplar folder nor a PNG or JPEG image"));
         }
         if !toml_path.is_file() {
-            return Err(Error::exemplar(dir, "has no exemplar.toml; is this an exemplar folder?"));
+            return Err(Error::exemplar(
+                dir,
+                "has no exemplar.toml; is this an exemplar folder? (frames of paint are made into one with \
+                 `fluidymation exemplar import`)",
+            ));
         }
         let text = std::fs::read_to_string(&toml_path).map_err(|e| Error::io(&toml_path, e))?;
         let meta = parse_meta(&text, &toml_path)?;

@@ -163,6 +163,10 @@ pub fn find(name_or_path: &str, search: &SearchPath) -> Result<Exemplar> {
     {
         return b.load();
     }
+    // A folder of that name here that is not an exemplar (say, raw video frames): say so.
+    if p.is_dir() {
+        return Exemplar::load(p);
+    }
     let mut available: Vec<String> = list(search).into_iter().filter(|i| !i.shadowed).map(|i| i.name).collect();
     available.sort();
     Err(Error::UnknownExemplar { name: name_or_path.to_string(), available })

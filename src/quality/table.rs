@@ -58,10 +58,15 @@ fn notes(r: &Row) -> String {
 
 impl fmt::Display for SuiteReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let long = if self.rows.iter().any(|r| r.target == "long") {
+            format!(", long {} in windows of {}", self.long_frames, self.window)
+        } else {
+            String::new()
+        };
         writeln!(
             f,
-            "quality suite: targets {0}x{0} ({1} frames, long {2} in windows of {3}), engine seed {4}, {5:.0} s",
-            self.side, self.frames, self.long_frames, self.window, self.seed, self.seconds
+            "quality suite: targets {0}x{0} ({1} frames{long}), engine seed {2}, {3:.1} s",
+            self.side, self.frames, self.seed, self.seconds
         )?;
         writeln!(f, "coverage (IoU) {}; IoU α: of the engine's alpha", self.coverage)?;
         writeln!(

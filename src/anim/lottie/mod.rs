@@ -388,7 +388,7 @@ pub fn from_model(path: &Path, model: Model, options: &LoadOptions) -> Result<An
         }
         names.push(unique.clone());
         let (w, has) = region_warnings_and_strokes(&model, spec.target);
-        let color = dominant_color(&model, spec.target, &spec.visible).unwrap_or([1.0, 1.0, 1.0, 1.0]);
+        let color = dominant_color(&model, spec.target, &spec.visible).unwrap_or([1.0, 1.0, 1.0, 0.0]);
         regions.push(Region {
             index: n + 1,
             name: unique,

@@ -23,7 +23,6 @@ impl Warn<'_> {
     fn add(&mut self, what: impl AsRef<str>) {
         let msg = format!("layer '{}': {}", self.layer, what.as_ref());
         if !self.out.contains(&msg) {
-            log::warn!("{msg}");
             self.out.push(msg);
         }
     }
@@ -723,7 +722,6 @@ impl Builder<'_> {
                     found => {
                         let what = if found.is_some() { "is the layer itself" } else { "does not exist" };
                         let msg = format!("layer '{}': parent {} {what}; ignored", out[i].name, p);
-                        log::warn!("{msg}");
                         out[i].warnings.push(msg);
                     }
                 }
@@ -737,7 +735,6 @@ impl Builder<'_> {
                 seen += 1;
                 if seen > out.len() {
                     let msg = format!("layer '{}': parenting cycle; parent ignored", out[i].name);
-                    log::warn!("{msg}");
                     out[i].warnings.push(msg);
                     out[i].parent = None;
                     break;
@@ -755,7 +752,6 @@ impl Builder<'_> {
                 4 => MatteMode::LumaInverted,
                 other => {
                     let msg = format!("layer '{}': track matte mode {} is not supported; ignored", out[i].name, other);
-                    log::warn!("{msg}");
                     out[i].warnings.push(msg);
                     continue;
                 }
@@ -771,7 +767,6 @@ impl Builder<'_> {
                 }
                 _ => {
                     let msg = format!("layer '{}': its track matte layer does not exist; matte ignored", out[i].name);
-                    log::warn!("{msg}");
                     out[i].warnings.push(msg);
                 }
             }
