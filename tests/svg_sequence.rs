@@ -94,6 +94,13 @@ fn mismatched_sizes_and_bad_files_are_errors() {
     assert!(matches!(anim::load(&d, &LoadOptions::default()).unwrap_err(), Error::Empty { .. }));
     let e = anim::load(&dir("nothing").join("*.svg"), &LoadOptions::default()).unwrap_err();
     assert!(matches!(e, Error::Empty { .. }), "{e}");
+    // No width, height or viewBox: the size would be guessed from the drawing (and differ from
+    // frame to frame); said as such, naming the frame.
+    let d = dir("nosize");
+    let bare = "<svg xmlns='http://www.w3.org/2000/svg'><g id='x'><rect width='15' height='9'/></g></svg>";
+    std::fs::write(d.join("a1.svg"), bare).unwrap();
+    let e = anim::load(&d, &LoadOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("a1.svg") && e.contains("no width and height and no viewBox"), "{e}");
 }
 
 #[test]

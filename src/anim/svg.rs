@@ -212,6 +212,13 @@ fn check_numbers(path: &Path, doc: &roxmltree::Document) -> Result<()> {
 }
 
 /// The layers of one frame, bottom first.
+/// Whether the root `<svg>` says its size: a `viewBox`, or both `width` and `height`.
+fn has_size(path: &Path, text: &str) -> Result<bool> {
+    let doc = parse_xml(path, text)?;
+    let root = doc.root_element();
+    Ok(root.has_attribute("viewBox") || (root.has_attribute("width") && root.has_attribute("height")))
+}
+
 fn top_level(path: &Path, text: &str) -> Result<(Vec<TopLevel>, bool)> {
     let doc = parse_xml(path, text)?;
     check_numbers(path, &doc)?;
@@ -371,6 +378,17 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
         any_filter |= text.contains("<filter");
         let tree = usvg::Tree::from_str(&text, &opt).map_err(|e| Error::animation(path, format!("SVG: {e}")))?;
         let s = (tree.size().width(), tree.size().height());
+        if !has_size(path, &text)? {
+            return Err(Error::animation(
+                path,
+                format!(
+                    "the <svg> element has no width and height and no viewBox, so its size ({}x{}) would be guessed \
+                     from what this frame draws; give every frame the same viewBox (or width and height)",
+                    s.0.round(),
+                    s.1.round()
+                ),
+            ));
+        }
         // Shapes drawn far outside the canvas cost unbounded work to stroke and fill (a
         // circle scaled 2 000 000 times hangs the rasterizer; found by fuzzing).
         let b = tree.root().abs_stroke_bounding_box();
