@@ -55,8 +55,8 @@ fn inner_mean(p: &Plane<Rgb>) -> f32 {
 /// the flat one within 0.003–0.052 over the fade (frames 2–9, opacity 11–89 %; at 100 % the
 /// paint is its own look, 0.126 lighter than flat: texture, blooms, and the square's green at 0
 /// floored, `TINT_FLOOR`) and falls at every frame; its texture in linear light is 0.96–1.00 of
-/// the full layer's per unit of opacity. Floors: within opacity × the full layer's difference
-/// + 0.01 (0.024–0.122), strictly falling, texture > 0.8. Before (measured with the previous
+/// the full layer's per unit of opacity. Floors: within opacity × the full layer's difference,
+/// plus 0.01 (0.024–0.122), strictly falling, texture > 0.8. Before (measured with the previous
 /// build on the same file), the square was absent at frames 2–3 (0.033 and 0.068 from flat) and
 /// at full strength from frame 4 on (0.428 from flat there), the same at every frame after.
 #[test]
