@@ -211,6 +211,12 @@ fn target_fill(rf: &RegionFrame, strokes: StrokeMode) -> Plane<Rgba> {
     }
 }
 
+/// What the engine paints of a region frame: the coverage of [`target_fill`]
+/// ([`RegionFrame::coverage`]).
+fn target_coverage(rf: &RegionFrame, strokes: StrokeMode) -> Plane<f32> {
+    crate::anim::coverage_of(&target_fill(rf, strokes), rf.opacity_in_alpha)
+}
+
 /// The style of layers without one of their own.
 fn default_style(opts: &RenderOptions) -> Style {
     opts.default_style.clone().unwrap_or_else(|| Style::named(exemplar::DEFAULT))
@@ -356,7 +362,7 @@ fn prepare(
             let ex = &exemplars[e];
             let exemplar_border = p.exemplar_border_width(ex);
             let thickness = crate::synth::sequence_thickness(range.len(), |k| {
-                Ok(composite::coverage(&target_fill(&anim.render(region, range.start + k)?, opts.strokes)))
+                Ok(target_coverage(&anim.render(region, range.start + k)?, opts.strokes))
             })?;
             Ok(Some((e, thickness.map_or_else(|| p.clone(), |t| p.fit_to_thickness(t, exemplar_border)))))
         })
@@ -398,7 +404,8 @@ fn recolor_paint(
     opts: &RenderOptions,
 ) -> Result<StylizedLayer> {
     let (rgb, mask) = paint.rgb_mask();
-    composite::recolor_with(&rgb, &mask, &target_fill(rf, opts.strokes), pigment, opts.recolor)
+    // A mask sequence's gray is coverage, not opacity: such a layer is opaque.
+    composite::recolor_layer(&rgb, &mask, &target_fill(rf, opts.strokes), pigment, opts.recolor, rf.opacity_in_alpha)
 }
 
 /// Composites one frame from its regions (top-most first: a recolored layer or `None` for a
@@ -688,7 +695,7 @@ fn paint_layer(
             .zip(out.mask.data())
             .flat_map(|(c, &m)| [q(c[0]), q(c[1]), q(c[2]), if m { 255 } else { 0 }])
             .collect();
-        let cov: Vec<u8> = composite::coverage(&target_fill(rf, opts.strokes)).data().iter().map(|&c| q(c)).collect();
+        let cov: Vec<u8> = target_coverage(rf, opts.strokes).data().iter().map(|&c| q(c)).collect();
         l.kept.push((rgba, cov));
     }
     Ok(Some(layer))
@@ -738,7 +745,7 @@ fn start_layer(
         || Ok(style.source.clone()),
         &style.params,
         range.len(),
-        |k| Ok(composite::coverage(&target_fill(&anim.render(region, first + k)?, strokes))),
+        |k| Ok(target_coverage(&anim.render(region, first + k)?, strokes)),
     )
 }
 

@@ -102,3 +102,29 @@ fn a_fading_layer_is_painted_with_its_opacity() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A mask sequence's gray is coverage, not opacity: a soft edge (a ramp over 12 px) stays where
+/// the mask puts it — the engine's mask is its gray at ½ — and is not widened as an opacity
+/// would be (the alpha over its neighbourhood's largest put the edge 2 px from the ramp's
+/// foot, 4 px further out here).
+#[test]
+fn a_mask_sequence_keeps_its_soft_edges() {
+    let dir = scratch("soft");
+    let masks = dir.join("masks");
+    std::fs::create_dir_all(&masks).unwrap();
+    let soft = image::GrayImage::from_fn(64, 64, |x, _| {
+        image::Luma([((x as f32 - 20.0) / 12.0 * 255.0).clamp(0.0, 255.0).round() as u8])
+    });
+    for k in 1..=2 {
+        soft.save(masks.join(format!("{k:04}.png"))).unwrap();
+    }
+    let a = anim::load(&masks, &Default::default()).unwrap();
+    let cov = a.render(0, 0).unwrap().coverage();
+    for x in 0..64 {
+        let want = soft.get_pixel(x as u32, 10)[0] as f32 / 255.0;
+        assert!((cov.get(x, 10) - want).abs() < 1e-3, "x {x}: coverage {} for gray {want}", cov.get(x, 10));
+    }
+    // The ½ crossing is mid-ramp (x = 26), where the gray says.
+    assert!(cov.get(25, 10) < 0.5 && cov.get(27, 10) > 0.5);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -26,7 +26,7 @@ impl RegionRenderer for MaskSequence {
             cov = img::resize_bilinear(&cov, self.scaled.0, self.scaled.1);
         }
         let fill = cov.map(|a| [1.0, 1.0, 1.0, a.clamp(0.0, 1.0)]);
-        Ok(RegionFrame { fill, strokes: None })
+        Ok(RegionFrame { fill, strokes: None, opacity_in_alpha: false })
     }
 }
 

@@ -163,14 +163,24 @@ pub struct RegionFrame {
     /// The strokes, straight RGBA, when the region strokes anything at this frame (`None`
     /// when it has no strokes at all, see [`Region::has_strokes`], or none at this frame).
     pub strokes: Option<Plane<Rgba>>,
+    /// Whether the fill's alpha includes the layer's opacity (Lottie, SVG), which is then
+    /// separated from its coverage ([`RegionFrame::coverage`]); false when the alpha is coverage
+    /// alone (a mask sequence's gray values, soft edges included).
+    pub opacity_in_alpha: bool,
 }
 
 impl RegionFrame {
     /// The coverage of the fills by their shapes, whatever their opacity: the alpha divided by
-    /// the layer's opacity there (the largest alpha within 2 px).
+    /// the layer's opacity there (the largest alpha within 2 px); the alpha itself when it is
+    /// coverage alone ([`RegionFrame::opacity_in_alpha`]).
     pub fn coverage(&self) -> Plane<f32> {
-        crate::composite::coverage(&self.fill)
+        coverage_of(&self.fill, self.opacity_in_alpha)
     }
+}
+
+/// The coverage of a fill (see [`RegionFrame::coverage`]).
+pub(crate) fn coverage_of(fill: &Plane<Rgba>, opacity_in_alpha: bool) -> Plane<f32> {
+    if opacity_in_alpha { crate::composite::coverage(fill) } else { fill.map(|c| c[3]) }
 }
 
 /// Renders the regions of a loaded animation. Implemented by each input format.

@@ -323,7 +323,7 @@ impl SvgSequence {
         } else {
             None
         };
-        Ok(RegionFrame { fill, strokes })
+        Ok(RegionFrame { fill, strokes, opacity_in_alpha: true })
     }
 
     /// The dominant color (area-weighted mode over a 5-bit-per-channel histogram) of region

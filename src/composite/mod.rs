@@ -18,7 +18,7 @@
 //! #     crate::anim::RegionFrame, crate::exemplar::Exemplar) { unimplemented!() }
 //! let (rgb, mask, region_frame, exemplar) = frames();
 //! let pigment = Pigment::from_exemplar(&exemplar); // once per exemplar
-//! let layer = composite::recolor_with(&rgb, &mask, &region_frame.fill, &pigment, Recolor::Glaze)?;
+//! let layer = composite::recolor_layer(&rgb, &mask, &region_frame.fill, &pigment, Recolor::Glaze, true)?;
 //! let layers = [LayerFrame::stylized(&layer, region_frame.strokes.as_ref())]; // bottom to top
 //! let (w, h) = rgb.size();
 //! let frame = composite::composite(w, h, &Background::default(), &layers, StrokeMode::Keep)?;
@@ -81,7 +81,10 @@ mod recolor;
 
 pub use background::{Background, WHITE};
 pub use color::parse_color;
-pub use recolor::{INTENSITY_FLOOR, Pigment, StylizedLayer, painted, recolor_with};
+pub(crate) use recolor::recolor_layer;
+#[cfg(test)]
+pub use recolor::recolor_with;
+pub use recolor::{INTENSITY_FLOOR, Pigment, StylizedLayer, painted};
 
 use crate::error::{Error, Result};
 use crate::img::{Plane, Rgb, Rgba};
@@ -180,8 +183,8 @@ pub(crate) const OPACITY_RADIUS: usize = 2;
 /// coverage × opacity — the layer's and the fill's, animated or not): the largest alpha within
 /// [`OPACITY_RADIUS`], so that an antialiased edge has the opacity of the paint beside it;
 /// where nothing of the layer is that close, the layer's largest alpha in the frame. A layer
-/// at 40 % opacity is painted with 40 % of the paint (a thinner glaze; see [`recolor_with`]),
-/// not left out because its alpha is under ½, nor painted at full strength.
+/// at 40 % opacity is painted whole and laid over what is below with 40 % alpha (see
+/// [`recolor_layer`]), not left out because its alpha is under ½, nor painted at full strength.
 pub(crate) fn opacity(flat: &Plane<Rgba>) -> Plane<f32> {
     let (w, h) = flat.size();
     let r = OPACITY_RADIUS;

@@ -240,6 +240,18 @@ pub fn recolor(
     recolor_with(stylized, mask, flat, &pigment, mode)
 }
 
+/// [`recolor_layer`] of a layer whose flat alpha holds its opacity (Lottie, SVG).
+#[cfg(test)] // the tests' entry; the renderer calls `recolor_layer`
+pub fn recolor_with(
+    stylized: &Plane<Rgb>,
+    mask: &Mask,
+    flat: &Plane<Rgba>,
+    pigment: &Pigment,
+    mode: Recolor,
+) -> Result<StylizedLayer> {
+    recolor_layer(stylized, mask, flat, pigment, mode, true)
+}
+
 /// Recolors one synthesized frame of a layer against a known [`Pigment`].
 ///
 /// For every pixel inside `mask`:
@@ -249,15 +261,19 @@ pub fn recolor(
 ///   synthesized mask) `F` is blended with the nearest covered colors (push–pull filling of the
 ///   premultiplied flat rendering), so edges keep their hue instead of turning black or white;
 /// - [`Recolor::None`] keeps the exemplar's transmittance `I / P` (per channel, linear, at most
-///   1) with `a = 1`.
+///   1) with `a = 1`;
+/// - the layer's opacity ([`super::opacity`], from `flat`'s alpha) is kept; with
+///   `opacity_in_alpha` false (a mask sequence, whose flat alpha is coverage alone) the layer
+///   is drawn at full opacity.
 ///
 /// How these become pixels is described at [`composite`](super::composite).
-pub fn recolor_with(
+pub(crate) fn recolor_layer(
     stylized: &Plane<Rgb>,
     mask: &Mask,
     flat: &Plane<Rgba>,
     pigment: &Pigment,
     mode: Recolor,
+    opacity_in_alpha: bool,
 ) -> Result<StylizedLayer> {
     check_size("mask size", mask.size(), stylized.size())?;
     check_size("flat layer size", flat.size(), stylized.size())?;
@@ -267,7 +283,7 @@ pub fn recolor_with(
     let grown = mask.bounding_box().filter(|_| mode != Recolor::None).map(|b| b.expand(TINT_MARGIN, w, h));
     let tint = grown.map(|g| (g, extended_tint(flat, mask, g)));
     let paper_lin = rgb_to_linear(pigment.paper());
-    let opacity = super::opacity(flat);
+    let opacity = if opacity_in_alpha { super::opacity(flat) } else { Plane::filled(w, h, 1.0) };
     Ok(layer(mask, mode, |x, y| {
         let c = stylized.get(x, y);
         let o = opacity.get(x, y);

@@ -193,8 +193,7 @@ pub(crate) fn paint_regions(
             if complete.exists() {
                 std::fs::remove_file(&complete).map_err(|e| Error::io(&complete, e))?;
             }
-            let coverage =
-                |k: usize| Ok(composite::coverage(&target_fill(&anim.render(region, range.start + k)?, opts.strokes)));
+            let coverage = |k: usize| Ok(super::target_coverage(&anim.render(region, range.start + k)?, opts.strokes));
             let mut emit = |j: usize, out: KeyedFrame| -> Result<()> {
                 super::paint::Paint::from_frame(&out.rgb, &out.mask).save(&dir.join(format!("{:04}.png", j + 1)))
             };

@@ -49,7 +49,7 @@ impl Paint {
         (self.width, self.height)
     }
 
-    /// The colors and the mask, as [`composite::recolor_with`](crate::composite::recolor_with)
+    /// The colors and the mask, as [`composite::recolor_layer`](crate::composite::recolor_layer)
     /// takes them. A pixel is inside the mask when its alpha is at least half.
     pub fn rgb_mask(&self) -> (Plane<Rgb>, Mask) {
         let px = self.data.chunks_exact(4);

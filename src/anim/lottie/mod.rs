@@ -318,7 +318,7 @@ impl RegionRenderer for LottieRenderer {
         } else {
             None
         };
-        Ok(RegionFrame { fill, strokes })
+        Ok(RegionFrame { fill, strokes, opacity_in_alpha: true })
     }
 }
 
