@@ -121,7 +121,8 @@ pub struct Region {
     pub color: Rgba,
     /// True when the region draws strokes (reported separately in [`RegionFrame::strokes`]).
     pub has_strokes: bool,
-    /// Non-fatal problems (unsupported features) found in this region.
+    /// Non-fatal problems (unsupported features) found in this region, each naming its layer
+    /// (`layer 'arm': …`; in a Lottie region, possibly a layer nested inside it).
     pub warnings: Vec<String>,
 }
 

@@ -211,15 +211,18 @@ fn check_numbers(path: &Path, doc: &roxmltree::Document) -> Result<()> {
     Ok(())
 }
 
-/// The layers of one frame, bottom first.
-/// Whether the root `<svg>` says its size: a `viewBox`, or both `width` and `height`.
-fn has_size(path: &Path, text: &str) -> Result<bool> {
-    let doc = parse_xml(path, text)?;
-    let root = doc.root_element();
-    Ok(root.has_attribute("viewBox") || (root.has_attribute("width") && root.has_attribute("height")))
+/// What [`top_level`] finds in one frame.
+struct FrameInfo {
+    /// The layers, bottom first.
+    layers: Vec<TopLevel>,
+    /// Whether it has `<text>` (not rendered).
+    has_text: bool,
+    /// Whether the root `<svg>` says its size: a `viewBox`, or both `width` and `height`.
+    has_size: bool,
 }
 
-fn top_level(path: &Path, text: &str) -> Result<(Vec<TopLevel>, bool)> {
+/// The layers of one frame, bottom first, and what else the loader checks in it.
+fn top_level(path: &Path, text: &str) -> Result<FrameInfo> {
     let doc = parse_xml(path, text)?;
     check_numbers(path, &doc)?;
     let root = doc.root_element();
@@ -253,7 +256,8 @@ fn top_level(path: &Path, text: &str) -> Result<(Vec<TopLevel>, bool)> {
         };
         out.push(TopLevel { name, range: child.range(), strokes: sets_stroke(child) });
     }
-    Ok((out, has_text))
+    let has_size = root.has_attribute("viewBox") || (root.has_attribute("width") && root.has_attribute("height"));
+    Ok(FrameInfo { layers: out, has_text, has_size })
 }
 
 /// The document with every top-level element not named `keep` hidden.
@@ -299,7 +303,7 @@ impl SvgSequence {
         let path = &self.files[frame];
         let name = &self.names[region];
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        let (layers, _) = top_level(path, &text)?;
+        let layers = top_level(path, &text)?.layers;
         let draw = |sheet: &str| -> Result<tiny_skia::Pixmap> {
             let mut pm = tiny_skia::Pixmap::new(width, height)
                 .ok_or_else(|| Error::animation(path, "could not allocate the canvas"))?;
@@ -373,12 +377,12 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
         if text.trim().is_empty() {
             return Err(Error::Empty { path: path.clone(), what: "the SVG file is empty".into() });
         }
-        let (layers, has_text) = top_level(path, &text)?;
+        let FrameInfo { layers, has_text, has_size } = top_level(path, &text)?;
         any_text |= has_text;
         any_filter |= text.contains("<filter");
         let tree = usvg::Tree::from_str(&text, &opt).map_err(|e| Error::animation(path, format!("SVG: {e}")))?;
         let s = (tree.size().width(), tree.size().height());
-        if !has_size(path, &text)? {
+        if !has_size {
             return Err(Error::animation(
                 path,
                 format!(

@@ -262,8 +262,7 @@ fn check_gif_name(gif: &Path, inputs: &[PathBuf]) -> Result<()> {
             gif.display()
         );
     }
-    let same = |i: &PathBuf| i == gif || (i.exists() && gif.exists() && same_file(i, gif));
-    if let Some(i) = inputs.iter().find(|i| same(i)) {
+    if let Some(i) = inputs.iter().find(|i| *i == gif || same_file(i, gif)) {
         bail!("--gif '{}' is the input '{}': it would be overwritten", gif.display(), i.display());
     }
     if gif.is_file() {
@@ -313,15 +312,9 @@ pub fn print_warnings(input: &Path, anim: &Animation) {
     for w in &anim.warnings {
         log::warn!("{}: {}", input.display(), w);
     }
-    for r in &anim.regions {
-        for w in &r.warnings {
-            // Lottie's name their layer already.
-            if w.starts_with("layer '") {
-                log::warn!("{}: {}", input.display(), w);
-            } else {
-                log::warn!("{}: layer '{}': {}", input.display(), r.name, w);
-            }
-        }
+    // A region's warnings name their layer (a Lottie region's may be about a layer inside it).
+    for w in anim.regions.iter().flat_map(|r| &r.warnings) {
+        log::warn!("{}: {}", input.display(), w);
     }
 }
 

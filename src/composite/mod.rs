@@ -88,7 +88,7 @@ pub use recolor::{INTENSITY_FLOOR, Pigment, StylizedLayer, painted};
 
 use crate::error::{Error, Result};
 use crate::img::{Plane, Rgb, Rgba};
-use color::{fast_exp, fast_ln, rgb_to_linear};
+use color::{fast_exp, fast_ln, rgb_to_linear, sanitize};
 use rayon::prelude::*;
 
 /// With [`Recolor::Over`], paint of at least this amount (a fraction of the typical density)
@@ -188,13 +188,22 @@ pub(crate) const OPACITY_RADIUS: usize = 2;
 pub(crate) fn opacity(flat: &Plane<Rgba>) -> Plane<f32> {
     let (w, h) = flat.size();
     let r = OPACITY_RADIUS;
-    let alpha = |x: usize, y: usize| sanitize_alpha(flat.get(x, y)[3]);
-    let rows: Plane<f32> = Plane::par_from_fn(w, h, |x, y| {
+    let alpha = |x: usize, y: usize| sanitize(flat.get(x, y)[3]);
+    // Only within `r` of the layer's paint is there an opacity to read: the windows are
+    // computed there alone (a layer covers a small part of most frames).
+    let Some(b) = flat.map(|c| sanitize(c[3]) > 0.0).bounding_box() else { return Plane::new(w, h) };
+    let b = b.expand(r, w, h);
+    let rows: Plane<f32> = Plane::par_from_fn(b.x1 - b.x0, b.y1 - b.y0, |x, y| {
+        let (x, y) = (b.x0 + x, b.y0 + y);
         (x.saturating_sub(r)..(x + r + 1).min(w)).map(|i| alpha(i, y)).fold(0.0, f32::max)
     });
     let most = rows.data().iter().copied().fold(0.0, f32::max);
     Plane::par_from_fn(w, h, |x, y| {
-        let o = (y.saturating_sub(r)..(y + r + 1).min(h)).map(|j| rows.get(x, j)).fold(0.0, f32::max);
+        if !b.contains(x, y) {
+            return most;
+        }
+        let (x, y) = (x - b.x0, y - b.y0);
+        let o = (y.saturating_sub(r)..(y + r + 1).min(rows.height())).map(|j| rows.get(x, j)).fold(0.0, f32::max);
         if o > 0.0 { o } else { most }
     })
 }
@@ -205,13 +214,9 @@ pub(crate) fn opacity(flat: &Plane<Rgba>) -> Plane<f32> {
 pub(crate) fn coverage(flat: &Plane<Rgba>) -> Plane<f32> {
     let o = opacity(flat);
     Plane::par_from_fn(flat.width(), flat.height(), |x, y| {
-        let (a, o) = (sanitize_alpha(flat.get(x, y)[3]), o.get(x, y));
+        let (a, o) = (sanitize(flat.get(x, y)[3]), o.get(x, y));
         if o > 0.0 { (a / o).min(1.0) } else { 0.0 }
     })
-}
-
-fn sanitize_alpha(a: f32) -> f32 {
-    if a.is_finite() { a.clamp(0.0, 1.0) } else { 0.0 }
 }
 
 /// Composites `layers` (bottom to top) over `background` into a `width × height` frame of
@@ -381,8 +386,7 @@ fn draw_stylized(layer: &StylizedLayer, y: usize, acc: &mut [[f32; 4]], base: &[
         let a = &mut acc[x];
         match layer.mode {
             Recolor::Glaze => {
-                let amount = p.amount;
-                if amount <= 0.0 || p.opacity <= 0.0 {
+                if p.amount <= 0.0 || p.opacity <= 0.0 {
                     continue;
                 }
                 let b = &base[x];
@@ -403,9 +407,9 @@ fn draw_stylized(layer: &StylizedLayer, y: usize, acc: &mut [[f32; 4]], base: &[
                 // At partial opacity o the glazed layer is laid over what is below with alpha o,
                 // as a flat layer is: T → 1 − o + o·T.
                 let o = p.opacity;
-                let t_at = |i: usize| 1.0 - o + o * fast_exp(amount * (p.ln[i] - ln_base[i]).min(0.0));
+                let t_at = |i: usize| 1.0 - o + o * fast_exp(p.amount * (p.ln[i] - ln_base[i]).min(0.0));
                 let t = [t_at(0), t_at(1), t_at(2)];
-                let lift = o * beta * amount.min(1.0);
+                let lift = o * beta * p.amount.min(1.0);
                 if lift > 0.0 {
                     let k = 1.0 - lift;
                     *a = [lift + k * a[0], lift + k * a[1], lift + k * a[2], lift + k * a[3]];

@@ -283,10 +283,10 @@ pub(crate) fn recolor_layer(
     let grown = mask.bounding_box().filter(|_| mode != Recolor::None).map(|b| b.expand(TINT_MARGIN, w, h));
     let tint = grown.map(|g| (g, extended_tint(flat, mask, g)));
     let paper_lin = rgb_to_linear(pigment.paper());
-    let opacity = if opacity_in_alpha { super::opacity(flat) } else { Plane::filled(w, h, 1.0) };
+    let opacity = opacity_in_alpha.then(|| super::opacity(flat));
     Ok(layer(mask, mode, |x, y| {
         let c = stylized.get(x, y);
-        let o = opacity.get(x, y);
+        let o = opacity.as_ref().map_or(1.0, |o| o.get(x, y));
         match &tint {
             Some((g, t)) => (pigment.amount(c), o, t.get(x - g.x0, y - g.y0).map(|v| v.max(TINT_FLOOR))),
             None => {
