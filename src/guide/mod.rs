@@ -156,7 +156,7 @@ impl GuideParams {
     /// A stable text key of every parameter, for caches of computed guides.
     pub fn fingerprint(&self) -> String {
         format!(
-            "guides-v2 blur={} thr={} tblur={} frad={} tan={} tol={}",
+            "guides-v3 blur={} thr={} tblur={} frad={} tan={} tol={}",
             self.blur_sigma,
             self.mask_threshold,
             self.time_blur_sigma,
