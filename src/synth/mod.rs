@@ -582,10 +582,12 @@ impl Synthesizer {
 fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevState) -> Nnf {
     let active: Vec<bool> = source::dilate(&g.mask, HALF).into_vec();
     let inputs = shift::ShiftInputs {
+        carry_new: shift::moves_rather_than_grows(g.mask.data(), &prev.masks[0]),
         src: &src.levels[0],
         ext_prev: &prev.ext_pos,
         ext_cur: g.ext_pos.data(),
         flow_prev: &prev.flow,
+        flow_cur: g.flow.data(),
         dist_cur: g.dist.data(),
         band: src.border_width,
         step_cost: shift::step_cost(src.ext_scale, src.levels[0].frames),

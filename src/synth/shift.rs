@@ -17,6 +17,9 @@ pub(crate) struct ShiftInputs<'a> {
     pub ext_cur: &'a [f32],
     /// `T^flow` of the previous frame: the motion from it to the current one.
     pub flow_prev: &'a [Vec2],
+    /// `T^flow` of the current frame (the motion from it to the next): where the previous
+    /// frame had no paint, the motion that brought it ([`carried_in`]).
+    pub flow_cur: &'a [Vec2],
     /// `T^dist` of the current frame.
     pub dist_cur: &'a [f32],
     /// The border width b: matches within it of an edge are re-anchored.
@@ -26,6 +29,9 @@ pub(crate) struct ShiftInputs<'a> {
     pub step_cost: f32,
     /// Pixels the current frame synthesizes.
     pub active: &'a [bool],
+    /// Pixels the previous frame did not paint take the match their motion came from
+    /// ([`carried_in`]; where the shape moves rather than grows, [`moves_rather_than_grows`]).
+    pub carry_new: bool,
     /// The time shift ([`super::ParamsBuilder::time_shift`]).
     pub time_shift: bool,
     /// Residual advection and re-anchoring ([`super::ParamsBuilder::advect`]).
@@ -37,6 +43,9 @@ pub(crate) struct ShiftInputs<'a> {
 /// Pixels of motion that one frame of deviation from the nominal step costs in the paper's
 /// rule alone (no advection): a tie-breaker, far below any real difference of motion.
 const TIE_BREAK: f32 = 0.02;
+
+/// Fixed-point steps of [`carried_in`]'s inversion of the warp.
+const INVERSION_STEPS: usize = 3;
 
 /// The cost of one frame of time travel beyond the nominal step when the rest of the motion
 /// is carried by advection: a quarter of the exemplar's mean speed (its extent scale over its
@@ -92,6 +101,97 @@ fn time_step(src: &SourceLevel, m: &Match, dt: f32, c: f32) -> Option<(usize, f3
     Some((best_i, path))
 }
 
+/// Whether a shape moves rather than grows from the previous mask to the current one (both
+/// over the same window): it gave up at least a third as much area as it newly covers, so
+/// what it newly covers is mostly the same paint moved along — a part that translates, turns
+/// or swings — and not paint spreading onto new paper, which grows without giving anything
+/// up (an exemplar's own bloom; a growing shape), whose front the search paints as new paint
+/// (the extent term).
+pub(crate) fn moves_rather_than_grows(cur: &[bool], prev: &[bool]) -> bool {
+    let (mut new, mut lost) = (0usize, 0usize);
+    for (&c, &p) in cur.iter().zip(prev) {
+        new += (c && !p) as usize;
+        lost += (p && !c) as usize;
+    }
+    new <= 3 * lost
+}
+
+/// The match a pixel `q` the previous frame did not paint takes from the pixel its motion came
+/// from: `p = q − f` with `f` the previous frame's flow at `p` (found by fixed-point
+/// iteration from the current frame's flow at `q`: the previous frame's flow is zero where it
+/// had no mask), the previous match at `⌊p⌉` time-shifted like any carried match
+/// and offset by `M·(p − ⌊p⌉)`, then re-anchored within the border band (where that move is
+/// refused, it stays at `⌊p⌉`'s match). `None` where `⌊p⌉` had no match either: the pixel is
+/// new paint, found by the search. Without it, only pixels within the active margin of the
+/// previous mask (2 px) were carried, and a part that moves farther in a frame — a thin limb
+/// swinging at up to 11 px a frame — was painted anew over most of its width every frame
+/// (measured on a 14-px limb: 15–28 % of its pixels had no carried match at its fastest).
+fn carried_in(inp: &ShiftInputs, prev: &Nnf, q: usize, c: f32) -> Option<Match> {
+    if !inp.carry_new || !inp.advect || !inp.time_shift {
+        return None;
+    }
+    let f = inp.flow_cur[q];
+    if f.length() < FLOW_EPS {
+        return None;
+    }
+    let here = Vec2::new((q % prev.w) as f32, (q / prev.w) as f32);
+    let index = |p: Vec2| {
+        let r = p.round();
+        (r.x >= 0.0 && r.y >= 0.0 && (r.x as usize) < prev.w && (r.y as usize) < prev.h)
+            .then(|| r.y as usize * prev.w + r.x as usize)
+    };
+    // The previous frame's flow at the source is the motion that brought it here: refine the
+    // estimate with it (a fixed-point inversion of the warp).
+    let mut p = here - f;
+    for _ in 0..INVERSION_STEPS {
+        match index(p).map(|k| inp.flow_prev[k]) {
+            Some(f) if f.length() >= FLOW_EPS => p = here - f,
+            _ => break,
+        }
+    }
+    let r = p.round();
+    let m = prev.data[index(p)?];
+    if !m.ok {
+        return None;
+    }
+    let dt = inp.ext_cur[q] - inp.ext_prev[q];
+    let (i, _) = time_step(inp.src, &m, dt, c)?;
+    let (dx, dy) = m.rotate(p.x - r.x, p.y - r.y);
+    let (mut x, mut y) = (m.x + dx, m.y + dy);
+    if let Some((x2, y2)) = reanchor(inp.src, i, x, y, inp.dist_cur[q], inp.band) {
+        (x, y) = (x2, y2);
+    }
+    let shifted = Match { i: i as u16, err: f32::INFINITY, ..m };
+    moved(inp.src, &shifted, x, y).or(Some(shifted))
+}
+
+/// Match `m` moved to `(x, y)` in its exemplar frame; `m` itself if that is where it is; `None`
+/// where the move is refused. The move must stay valid and on the same side of any divide of
+/// the exemplar's flow (its source, where the paint started). The rotation M turns with the
+/// exemplar's flow direction between the two points, so it still maps the target's flow onto
+/// the exemplar's where the match now is (the θ rule holds after the move).
+fn moved(src: &SourceLevel, m: &Match, x: f32, y: f32) -> Option<Match> {
+    if (x, y) == (m.x, m.y) {
+        return Some(*m);
+    }
+    let info_at = |x: f32, y: f32| src.info_at(m.i as usize, x, y).map(|(_, inf)| inf);
+    let to = info_at(x, y).filter(|to| to.flags & VALID != 0)?;
+    let (mut c, mut s) = (m.c, m.s);
+    if let Some(from) = info_at(m.x, m.y)
+        && from.dir != Vec2::ZERO
+        && to.dir != Vec2::ZERO
+    {
+        let (cos_p, sin_p) = (from.dir.dot(to.dir), from.dir.perp_dot(to.dir));
+        if cos_p < 0.0 {
+            return None;
+        }
+        let n = (cos_p * cos_p + sin_p * sin_p).sqrt();
+        let (cos_p, sin_p) = (cos_p / n, sin_p / n);
+        (c, s) = (m.c * cos_p - m.s * sin_p, m.s * cos_p + m.c * sin_p);
+    }
+    Some(Match { x, y, c, s, ..*m })
+}
+
 /// SHIFTNNF (paper §3.4), extended.
 ///
 /// For a match (i, x, y) with aligned flows, Δi ≥ 0 minimizes
@@ -121,8 +221,14 @@ pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
     let c = if inp.advect { inp.step_cost } else { TIE_BREAK };
     let mut out = Nnf::new(prev.w, prev.h);
     out.data.par_iter_mut().enumerate().for_each(|(q, o)| {
+        if !inp.active[q] {
+            return;
+        }
         let m = &prev.data[q];
-        if !m.ok || !inp.active[q] {
+        if !m.ok {
+            if let Some(carried) = carried_in(inp, prev, q, c) {
+                *o = carried;
+            }
             return;
         }
         if !inp.time_shift {
@@ -169,29 +275,9 @@ pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
         if let Some((x2, y2)) = reanchor(src, best_i, x, y, inp.dist_cur[q], inp.band) {
             (x, y) = (x2, y2);
         }
-        // The move must stay valid and on the same side of any divide of the exemplar's flow
-        // (its source, where the paint started). The rotation M turns with the exemplar's flow
-        // direction between the two points, so it still maps the target's flow onto the
-        // exemplar's where the match now is (the θ rule holds after the move).
-        let info_at = |x: f32, y: f32| src.info_at(best_i, x, y).map(|(_, inf)| inf);
-        if (x, y) == (m.x, m.y) {
-            return;
+        if let Some(moved) = moved(src, &shifted, x, y) {
+            *o = moved;
         }
-        let Some(to) = info_at(x, y).filter(|to| to.flags & VALID != 0) else { return };
-        let (mut c, mut s) = (m.c, m.s);
-        if let Some(from) = info_at(m.x, m.y)
-            && from.dir != Vec2::ZERO
-            && to.dir != Vec2::ZERO
-        {
-            let (cos_p, sin_p) = (from.dir.dot(to.dir), from.dir.perp_dot(to.dir));
-            if cos_p < 0.0 {
-                return;
-            }
-            let n = (cos_p * cos_p + sin_p * sin_p).sqrt();
-            let (cos_p, sin_p) = (cos_p / n, sin_p / n);
-            (c, s) = (m.c * cos_p - m.s * sin_p, m.s * cos_p + m.c * sin_p);
-        }
-        *o = Match { x, y, c, s, ..shifted };
     });
     if inp.settle {
         for _ in 0..SETTLE_PASSES {
