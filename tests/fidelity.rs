@@ -64,7 +64,9 @@ fn check(what: &str, value: Option<f32>, floor: f32, higher: bool, failures: &mu
 /// the shifted field settled, the merge judged against the carried field's estimate): IoU of
 /// the alpha 0.996–0.997, contrast 0.87–1.01 (of the exemplar's at the same depths), edge
 /// darkening 0.79–1.04, palette 0.011–0.035, incoherent change 0.58–0.83, motion agreement
-/// 0.61–0.67. With the merge's estimate voted from the up-scaled field (`--without
+/// 0.61–0.67 (after the flow window and the paint carried into newly covered pixels: contrast
+/// 0.87–1.03, ink-rims translating 1.01 → 1.03, the rest within 0.01). With the merge's
+/// estimate voted from the up-scaled field (`--without
 /// carried-estimate`, the previous default): contrast 0.85–0.96, edge darkening 0.77–1.06,
 /// palette 0.011–0.034, incoherent change 0.57–0.82. Before the field was settled and the
 /// supplied motion was the flow's path: contrast 0.84–0.95, edge darkening 0.80–1.06, palette
@@ -172,7 +174,8 @@ fn long_target_keeps_its_paint_in_every_window() {
 /// Measured (`quality -e green-wash --target long --scale 0.5`, and with `--without
 /// carried-rim`, `--without settle`; the merge judged against the carried field's estimate):
 /// lowest window ÷ first, rim 1.00 against 0.43 without the carried rim; contrast 0.77 against
-/// 0.71 without the carried rim and 0.76 without settling; over the whole run contrast 0.64
+/// 0.71 without the carried rim and 0.76 without settling (0.81 after the flow window and the
+/// paint carried into newly covered pixels); over the whole run contrast 0.64
 /// against 0.61 without settling. (Before the carried estimate: rim 1.00 against 0.37,
 /// contrast 0.82 against 0.70 and 0.74, whole run 0.65 against 0.59 — the carried estimate
 /// holds part of what the settling held.) Floors: the rim stays at ≥ 0.85 of the first
