@@ -199,6 +199,16 @@ fn translating_disc(w: usize, h: usize, c0: Vec2, r: f32, v: f32, k: usize) -> F
     FrameGuides { mask, dist, flow, ext_pos: zero.clone(), ext_neg: zero }
 }
 
+/// Three frames of a disc (radius r, from c0) translating by `v` px per frame on a 112×64
+/// target, synthesized from the small disc exemplar: the guides and the debug views.
+fn translating_views(c0: Vec2, r: f32, v: f32) -> (Vec<FrameGuides>, Vec<DebugViews>) {
+    let (mut s, _, _) = disc_synthesizer(8, 5, 13);
+    s.set_debug(true);
+    let target: Vec<FrameGuides> = (0..3).map(|k| translating_disc(112, 64, c0, r, v, k)).collect();
+    let views = target.iter().map(|t| s.step(t).unwrap().debug.unwrap()).collect();
+    (target, views)
+}
+
 /// Of the pairs of horizontally or vertically neighbouring pixels within `keep` that both have
 /// a match, the fraction whose matches continue each other: the same exemplar frame, and the
 /// neighbour's source point one rotated step M·e away (within ¼ px).
@@ -238,11 +248,7 @@ fn continuation(field: &Plane<[f32; 4]>, keep: impl Fn(usize, usize) -> bool) ->
 /// own residual, which cuts the pieces apart.
 #[test]
 fn shift_keeps_coherent_pieces_on_a_translating_shape() {
-    let (mut s, _, _) = disc_synthesizer(8, 5, 13);
-    s.set_debug(true);
-    let target: Vec<FrameGuides> =
-        (0..3).map(|k| translating_disc(112, 64, Vec2::new(36.0, 32.0), 22.0, 3.0, k)).collect();
-    let views: Vec<DebugViews> = target.iter().map(|t| s.step(t).unwrap().debug.unwrap()).collect();
+    let (target, views) = translating_views(Vec2::new(36.0, 32.0), 22.0, 3.0);
     // Away from the edge, where the border band's re-anchoring moves matches on purpose.
     let deep = |k: usize| {
         let dist = &target[k].dist;
@@ -261,11 +267,7 @@ fn shift_keeps_coherent_pieces_on_a_translating_shape() {
 /// painted anew every frame).
 #[test]
 fn a_fast_part_carries_its_paint_into_what_it_newly_covers() {
-    let (mut s, _, _) = disc_synthesizer(8, 5, 13);
-    s.set_debug(true);
-    let target: Vec<FrameGuides> =
-        (0..3).map(|k| translating_disc(112, 64, Vec2::new(30.0, 32.0), 12.0, 9.0, k)).collect();
-    let views: Vec<DebugViews> = target.iter().map(|t| s.step(t).unwrap().debug.unwrap()).collect();
+    let (target, views) = translating_views(Vec2::new(30.0, 32.0), 12.0, 9.0);
     let mask = &target[2].mask;
     let (mut inside, mut carried) = (0usize, 0usize);
     for y in 0..64 {
