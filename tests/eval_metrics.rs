@@ -602,7 +602,7 @@ fn depth_matching_compares_like_with_like() {
 /// only the mean |cos| between the translation and the boundary's normals, because masks reveal
 /// only the normal component of the motion. Measured: 0.594 (moving against the ellipse: −0.59). So a painter that carries its paint
 /// perfectly (painted keyframes, for one) cannot reach 0.7 on this target; compare with this
-/// ceiling, not with 1.
+/// ceiling, not with 1 — or measure against the known motion ([`eval::motion_agreement_with`]).
 #[test]
 fn motion_agreement_ceiling_on_the_translating_ellipse() {
     use fluidymation::quality::{Target, TargetKind};
@@ -625,5 +625,16 @@ fn motion_agreement_ceiling_on_the_translating_ellipse() {
     // Measured 0.594; the bounds leave ±0.05 for the block matcher's sub-pixel estimates.
     assert!((0.55..0.65).contains(&perfect), "{perfect}");
     assert!(against < -0.55, "{against}");
+    assert!(glued.abs() < 0.02, "{glued}");
+    // Against the whole translation, known for this generated target, the perfect carry scores
+    // ≈ 1 (measured 1.000, −1.000 against, 0.000 glued).
+    let known = |slip: f32| {
+        let frames: Vec<_> = (0..24).map(|k| carried(k, slip)).collect();
+        eval::motion_agreement_with(&frames, &shapes, &params, &|_, _, _| Some(speed)).value.unwrap()
+    };
+    let (perfect, glued, against) = (known(1.0), known(0.0), known(-1.0));
+    println!("against the known translation: carried exactly {perfect:.3}, glued {glued:.3}, against {against:.3}");
+    assert!(perfect > 0.95, "{perfect}");
+    assert!(against < -0.95, "{against}");
     assert!(glued.abs() < 0.02, "{glued}");
 }

@@ -270,6 +270,22 @@ impl Default for MotionParams {
 /// translating disc it scores the mean of `|cos φ|` between the translation and the normals,
 /// about 0.7. Compare values of similar shapes, or with the exemplar's own.
 pub fn motion_agreement(frames: &[Plane<f32>], shapes: &[Shape], params: &MotionParams) -> Measure {
+    motion_agreement_with(frames, shapes, params, &|i, x, y| target_motion(&shapes[i - 1], &shapes[i], x, y))
+}
+
+/// [`motion_agreement`] against a known motion of the target instead of the one its masks
+/// reveal: `motion(i, x, y)` is the motion at `(x, y)` from frame `i − 1` to frame `i`
+/// (pixels per frame; `None` where it is unknown). Masks only show the normal part of a
+/// motion, so on a translating ellipse even paint that moves exactly with it scores well
+/// below 1 against them; a generated target whose motion is known can be measured against
+/// the whole of it, where a perfect carry scores ≈ 1. Points, block matcher and scoring as
+/// in [`motion_agreement`].
+pub fn motion_agreement_with(
+    frames: &[Plane<f32>],
+    shapes: &[Shape],
+    params: &MotionParams,
+    motion: &(dyn Fn(usize, usize, usize) -> Option<Vec2> + Sync),
+) -> Measure {
     let n = frames.len().min(shapes.len());
     let means: Vec<Mean> = (0..n)
         .into_par_iter()
@@ -277,7 +293,9 @@ pub fn motion_agreement(frames: &[Plane<f32>], shapes: &[Shape], params: &Motion
             if i == 0 {
                 return Mean::default();
             }
-            motion_pair_mean((&frames[i - 1], &shapes[i - 1]), (&frames[i], &shapes[i]), params)
+            motion_pair_mean_with((&frames[i - 1], &shapes[i - 1]), (&frames[i], &shapes[i]), params, &|x, y| {
+                motion(i, x, y)
+            })
         })
         .collect();
     Measure::from_means(&means)
@@ -289,6 +307,16 @@ pub(crate) fn motion_pair_mean(
     prev: (&Plane<f32>, &Shape),
     next: (&Plane<f32>, &Shape),
     params: &MotionParams,
+) -> Mean {
+    motion_pair_mean_with(prev, next, params, &|x, y| target_motion(prev.1, next.1, x, y))
+}
+
+/// [`motion_pair_mean`] against the target motion `motion(x, y)`.
+fn motion_pair_mean_with(
+    prev: (&Plane<f32>, &Shape),
+    next: (&Plane<f32>, &Shape),
+    params: &MotionParams,
+    motion: &(dyn Fn(usize, usize) -> Option<Vec2> + Sync),
 ) -> Mean {
     let matcher = Matcher::new(&params.block);
     let stride = params.stride.max(1);
@@ -302,7 +330,7 @@ pub(crate) fn motion_pair_mean(
             if d <= 0.0 || d > params.band {
                 continue;
             }
-            match target_motion(sa, sb, x, y) {
+            match motion(x, y) {
                 Some(m) if m.length() >= params.min_speed => points.push((x, y, m)),
                 _ => {}
             }

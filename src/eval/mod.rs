@@ -77,8 +77,8 @@ pub use coverage::{
 pub use evaluator::{Evaluator, Reference, evaluate};
 pub use farneback::{FarnebackParams, MIN_LEVEL_SIDE, REGULARIZATION, farneback_flow, warp_bilinear};
 pub use flow::{
-    BlockMatchParams, MotionParams, block_matching_flow, match_block, motion_agreement, target_motion,
-    target_motion_field,
+    BlockMatchParams, MotionParams, block_matching_flow, match_block, motion_agreement, motion_agreement_with,
+    target_motion, target_motion_field,
 };
 pub use palette::{ColorHistogram, HISTOGRAM_BINS, palette_distance};
 pub use patches::{PATCH_SIZE, PCA_DIMS, PatchIndex, PatchParams, patch_nn_distance, patch_nn_distance_with};
