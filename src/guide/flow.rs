@@ -165,10 +165,8 @@ struct Task {
     /// The distinct frames of the window, ascending, and their samples once known.
     frames: Vec<usize>,
     rows: Vec<Option<Vec<f32>>>,
-    /// `D̃_j = Σ g · rows[slot]` and `D̃_{j+1}`, as (slot, weight) in kernel order.
-    w0: Kernel,
-    w1: Kernel,
-    /// The slot of frame `j + k` for `k = −rt ..= rt + 1` (clamped like the kernels).
+    /// The slot of frame `j + k` for `k = −rt ..= rt + 1` (frames beyond the run of
+    /// non-degenerate masks clamped to its ends, module docs, step 1).
     kslots: Vec<usize>,
 }
 
@@ -194,18 +192,22 @@ impl Task {
         }
     }
 
+    /// The distance sample of slot `slot` at stencil index `idx`.
+    fn sample(&self, slot: usize, idx: usize) -> f32 {
+        self.rows[slot].as_ref().map_or(0.0, |r| r[idx])
+    }
+
     fn smoothed(&self, weights: &[(usize, f32)], idx: usize) -> f32 {
         let mut acc = 0f32;
         for &(s, g) in weights {
-            acc += g * self.rows[s].as_ref().map_or(0.0, |r| r[idx]);
+            acc += g * self.sample(s, idx);
         }
         acc
     }
 
     /// The distance sample of frame `j + k` at stencil index `idx`.
     fn raw(&self, k: isize, rt: usize, idx: usize) -> f32 {
-        let slot = self.kslots[(k + rt as isize) as usize];
-        self.rows[slot].as_ref().map_or(0.0, |r| r[idx])
+        self.sample(self.kslots[(k + rt as isize) as usize], idx)
     }
 
     /// The temporal window a boundary pixel's distance fields may be averaged over, `k = −r ..=
@@ -244,11 +246,13 @@ impl Task {
         (r, true)
     }
 
-    /// The kernels `w0`, `w1` cut to `k = −r ..= r` and normalized again.
-    fn truncated_kernels(&self, cfg: &FlowConfig, r: usize) -> (Kernel, Kernel) {
+    /// The kernels of `D̃_j = Σ g · rows[slot]` and of `D̃_{j+1}`, as (slot, weight) in kernel
+    /// order, over `k = −r ..= r`: the whole temporal Gaussian for `r = rt`, else cut and
+    /// normalized again.
+    fn kernels(&self, cfg: &FlowConfig, r: usize) -> (Kernel, Kernel) {
         let rt = cfg.rt;
         let taps = rt - r..=rt + r;
-        let sum: f32 = cfg.kt[taps.clone()].iter().sum();
+        let sum: f32 = if r == rt { 1.0 } else { cfg.kt[taps.clone()].iter().sum() };
         let w0 = taps.clone().map(|t| (self.kslots[t], cfg.kt[t] / sum)).collect();
         let w1 = taps.map(|t| (self.kslots[t + 1], cfg.kt[t] / sum)).collect();
         (w0, w1)
@@ -260,6 +264,7 @@ impl Task {
         let w = mask.w;
         // Step 2: normal speed and outward normal at each boundary pixel, and whether the
         // distance fields could measure it (see `window_at`).
+        let whole = self.kernels(cfg, cfg.rt);
         let normals: Vec<(f32, Vec2, bool)> = self
             .nbr
             .iter()
@@ -267,9 +272,9 @@ impl Task {
                 let (r, reliable) = self.window_at(nb, cfg.rt);
                 let truncated;
                 let (w0, w1) = if r == cfg.rt {
-                    (&self.w0[..], &self.w1[..])
+                    (&whole.0[..], &whole.1[..])
                 } else {
-                    truncated = self.truncated_kernels(cfg, r);
+                    truncated = self.kernels(cfg, r);
                     (&truncated.0[..], &truncated.1[..])
                 };
                 let here = self.smoothed(w0, nb[0] as usize);
@@ -662,8 +667,6 @@ impl FlowMachine {
         frames.dedup();
         let slot = |f: usize| frames.binary_search(&f).unwrap_or(0);
         let rti = rt as isize;
-        let w0 = (-rti..=rti).map(|k| (slot(clamp(k)), self.cfg.kt[(k + rti) as usize])).collect();
-        let w1 = (-rti..=rti).map(|k| (slot(clamp(k + 1)), self.cfg.kt[(k + rti) as usize])).collect();
         let kslots = (-rti..=rti + 1).map(|k| slot(clamp(k))).collect();
         // The stencil: boundary pixels and their neighbours.
         let (w, h) = (mask.w, mask.h);
@@ -703,7 +706,7 @@ impl FlowMachine {
             .collect();
         let srect = mask.rect().expand(1, w, h);
         let rows = vec![None; frames.len()];
-        self.tasks.insert(j, Task { mask, stencil, srect, nbr, frames, rows, w0, w1, kslots });
+        self.tasks.insert(j, Task { mask, stencil, srect, nbr, frames, rows, kslots });
         Ok(())
     }
 

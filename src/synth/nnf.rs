@@ -66,6 +66,14 @@ impl Nnf {
         &self.data[y * self.w + x]
     }
 
+    /// The index of the entry nearest to point `p` (at `⌊p⌉`), if it lies in the field.
+    #[inline]
+    pub fn index_near(&self, p: glam::Vec2) -> Option<usize> {
+        let r = p.round();
+        (r.x >= 0.0 && r.y >= 0.0 && (r.x as usize) < self.w && (r.y as usize) < self.h)
+            .then(|| r.y as usize * self.w + r.x as usize)
+    }
+
     /// UPSCALENNF (paper §3.6): each coarse entry becomes a 2 × 2 block,
     /// `(x↑, y↑) = 2·(x′, y′) + c + M·((x̂ mod 2, ŷ mod 2) − c)` with c = (½, ½).
     pub fn upscale(&self, w: usize, h: usize) -> Nnf {

@@ -135,34 +135,43 @@ fn carried_in(inp: &ShiftInputs, prev: &Nnf, q: usize, c: f32) -> Option<Match> 
         return None;
     }
     let here = Vec2::new((q % prev.w) as f32, (q / prev.w) as f32);
-    let index = |p: Vec2| {
-        let r = p.round();
-        (r.x >= 0.0 && r.y >= 0.0 && (r.x as usize) < prev.w && (r.y as usize) < prev.h)
-            .then(|| r.y as usize * prev.w + r.x as usize)
-    };
     // The previous frame's flow at the source is the motion that brought it here: refine the
     // estimate with it (a fixed-point inversion of the warp).
     let mut p = here - f;
     for _ in 0..INVERSION_STEPS {
-        match index(p).map(|k| inp.flow_prev[k]) {
+        match prev.index_near(p).map(|k| inp.flow_prev[k]) {
             Some(f) if f.length() >= FLOW_EPS => p = here - f,
             _ => break,
         }
     }
-    let r = p.round();
-    let m = prev.data[index(p)?];
+    let dt = inp.ext_cur[q] - inp.ext_prev[q];
+    let (m, i, x, y) = warped_from(inp.src, prev, p, dt, c)?;
+    Some(placed(inp, q, m, i, x, y))
+}
+
+/// The previous frame's match nearest to `p` (at `⌊p⌉`), time-shifted under the extent change
+/// `dt` ([`time_step`]), and the point it stands for at `p`: its position offset by
+/// `M·(p − ⌊p⌉)`. `None` where `⌊p⌉` is off the field or had no match.
+fn warped_from(src: &SourceLevel, prev: &Nnf, p: Vec2, dt: f32, c: f32) -> Option<(Match, usize, f32, f32)> {
+    let m = prev.data[prev.index_near(p)?];
     if !m.ok {
         return None;
     }
-    let dt = inp.ext_cur[q] - inp.ext_prev[q];
-    let (i, _) = time_step(inp.src, &m, dt, c)?;
+    let (i, _) = time_step(src, &m, dt, c)?;
+    let r = p.round();
     let (dx, dy) = m.rotate(p.x - r.x, p.y - r.y);
-    let (mut x, mut y) = (m.x + dx, m.y + dy);
-    if let Some((x2, y2)) = reanchor(inp.src, i, x, y, inp.dist_cur[q], inp.band) {
-        (x, y) = (x2, y2);
-    }
+    Some((m, i, m.x + dx, m.y + dy))
+}
+
+/// Match `m` at target pixel `q`, time-shifted to exemplar frame `i` and carried to `(x, y)`:
+/// near the edge re-anchored to the target's distance from the edge — the rim of paint
+/// travels with the edge (flow magnitudes only approximate how far an edge moves, and the
+/// small errors of every frame would add up to a lagging, pale rim) — and [`moved`] there;
+/// where the move is refused, the time-shifted match where it was.
+fn placed(inp: &ShiftInputs, q: usize, m: Match, i: usize, x: f32, y: f32) -> Match {
     let shifted = Match { i: i as u16, err: f32::INFINITY, ..m };
-    moved(inp.src, &shifted, x, y).or(Some(shifted))
+    let (x, y) = reanchor(inp.src, i, x, y, inp.dist_cur[q], inp.band).unwrap_or((x, y));
+    moved(inp.src, &shifted, x, y).unwrap_or(shifted)
 }
 
 /// Match `m` moved to `(x, y)` in its exemplar frame; `m` itself if that is where it is; `None`
@@ -253,31 +262,14 @@ pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
             let rest = (speed - supplied).clamp(-speed, speed);
             let back = f / speed * rest;
             let p = Vec2::new((q % prev.w) as f32, (q / prev.w) as f32) - back;
-            let r = p.round();
-            let from = (r.x >= 0.0 && r.y >= 0.0 && (r.x as usize) < prev.w && (r.y as usize) < prev.h)
-                .then(|| *prev.get(r.x as usize, r.y as usize))
-                .filter(|m2| m2.ok)
-                .and_then(|m2| time_step(src, &m2, dt, c).map(|(i2, _)| (m2, i2)));
-            if let Some((m2, i2)) = from {
-                let (dx, dy) = m2.rotate(p.x - r.x, p.y - r.y);
-                (m, best_i, x, y) = (m2, i2, m2.x + dx, m2.y + dy);
+            if let Some(from) = warped_from(src, prev, p, dt, c) {
+                (m, best_i, x, y) = from;
             } else {
                 let (dx, dy) = m.rotate(back.x, back.y);
                 (x, y) = (x - dx, y - dy);
             }
         }
-        // The time-shifted match before it moves; what stays where the move is refused.
-        let shifted = Match { i: best_i as u16, err: f32::INFINITY, ..m };
-        *o = shifted;
-        // Near the edge, the match is re-anchored to the target's distance from the edge: the
-        // rim of paint travels with the edge. (Flow magnitudes only approximate how far an
-        // edge moves, and the small errors of every frame would add up to a lagging, pale rim.)
-        if let Some((x2, y2)) = reanchor(src, best_i, x, y, inp.dist_cur[q], inp.band) {
-            (x, y) = (x2, y2);
-        }
-        if let Some(moved) = moved(src, &shifted, x, y) {
-            *o = moved;
-        }
+        *o = placed(inp, q, m, best_i, x, y);
     });
     if inp.settle {
         for _ in 0..SETTLE_PASSES {
