@@ -60,7 +60,7 @@ pub mod eval;
 pub mod exemplar;
 pub mod guide;
 pub mod img;
-pub(crate) mod limits;
+pub mod limits;
 pub mod output;
 pub mod progress;
 pub mod quality;

@@ -57,6 +57,20 @@ fn limits_are_errors_before_any_work() {
     let err = stderr(&o);
     assert!(err.contains("memory this render needs") && err.contains("6400x6400") && err.contains("--scale"), "{err}");
     assert!(!out.exists());
+    // inspect's previews of that canvas (about 3.8 GB) over a 1 GB limit: refused the same way.
+    let masks = tmp.join("masks");
+    let o = bin()
+        .args(["inspect", demo.to_str().unwrap(), "--masks", masks.to_str().unwrap(), "--scale", "16", "--frames", "1"])
+        .env("FLUIDYMATION_MEMORY_LIMIT", "1G")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("mask and guide previews need") && err.contains("6400x6400") && err.contains("--scale"),
+        "{err}"
+    );
+    assert!(!masks.exists());
     // A precomp containing itself twice over a masked solid (ran for 40 s before).
     let solid = serde_json::json!({"ty": 1, "nm": "solid", "sc": "#ff0000", "sw": 200, "sh": 200, "ks": {},
         "masksProperties": [{"mode": "a", "pt": {"a": 0, "k": {"c": true, "v": [[10, 10], [190, 10], [190, 190]],

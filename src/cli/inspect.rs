@@ -176,6 +176,9 @@ pub fn run(args: Args, ctx: &Ctx) -> anyhow::Result<()> {
     let a = anim::load(&args.input, &opts).with_context(|| format!("could not load '{}'", args.input.display()))?;
     let range = super::params::parse_frames(args.frames.as_deref(), a.frames)?;
     super::params::warn_if_clipped(args.frames.as_deref(), &range, a.frames, "the input");
+    if args.masks.is_some() || args.guides.is_some() {
+        fluidymation::limits::check_preview_memory(&args.input, a.width, a.height)?;
+    }
     let measured = sampled(&range, args.masks.is_some());
     let stats = measure(&a, &measured, args.masks.as_ref(), ctx)?;
     if let Some(dir) = &args.guides {
