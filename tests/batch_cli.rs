@@ -507,3 +507,38 @@ fn a_layer_job_never_uses_damaged_state_and_the_composite_refuses_changed_paint(
         assert_same_results(&out, &rendered);
     }
 }
+
+#[test]
+fn frames_left_by_an_earlier_longer_render_are_pointed_out_single_and_batch() {
+    let tmp = Scratch::new("stale");
+    let (quads, demo) = (quads(), demo());
+    // One input, then a batch of two: render 4 frames, then 2 into the same place.
+    let single = tmp.join("single");
+    let batch = tmp.join("batch");
+    for frames in ["1..4", "1..2"] {
+        let quick = ["--scale", "0.25", "--frames", frames];
+        let mut one = vec![os("render"), quads.as_os_str(), os("-o"), single.as_os_str()];
+        one.extend(quick.iter().map(os));
+        let o1 = run(&one);
+        assert_success(&o1);
+        let mut two = vec![os("render"), quads.as_os_str(), demo.as_os_str(), os("-o"), batch.as_os_str()];
+        two.extend(quick.iter().map(os));
+        let o2 = run(&two);
+        assert_success(&o2);
+        let stale = |o: &Output, dir: &Path| {
+            stderr(o).lines().any(|l| {
+                l.contains(&format!("'{}'", dir.display()))
+                    && l.contains("2 frame(s) from an earlier render (0003.png–0004.png)")
+                    && l.contains("(1–2)")
+            })
+        };
+        // Nothing to say after the first run; after the second each folder is named.
+        let second = frames == "1..2";
+        assert_eq!(stale(&o1, &single), second, "{}", stderr(&o1));
+        for name in ["quads", "waving"] {
+            assert_eq!(stale(&o2, &batch.join(name)), second, "{name}: {}", stderr(&o2));
+        }
+    }
+    // The frames are kept (they may be wanted).
+    assert!(single.join("0004.png").is_file() && batch.join("waving/0004.png").is_file());
+}

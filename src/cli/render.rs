@@ -675,6 +675,11 @@ fn run_batch(args: &Args, ctx: &Ctx, layout: Vec<(PathBuf, Option<PathBuf>)>, st
     for (slot, r) in slots.into_iter().zip(rendered) {
         results[slot] = r.map_err(anyhow::Error::new);
     }
+    for (opts, r) in options.iter().zip(&results) {
+        if let (Ok(opts), Ok(_)) = (opts, r) {
+            warn_stale_frames(&opts.out_dir, &opts.frames);
+        }
+    }
 
     // The summary: one line per file, in the order given.
     let cancelled = results
