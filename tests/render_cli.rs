@@ -857,3 +857,48 @@ fn warnings_are_printed_once_with_the_file() {
     assert_eq!(lines.len(), 1, "{err}");
     assert!(lines[0].contains("blend.json") && lines[0].matches("layer 'tinted'").count() == 1, "{err}");
 }
+
+#[test]
+fn the_background_color_warning_is_about_fills_that_a_glaze_would_hide() {
+    let tmp = Scratch::new("pale");
+    let rect = |c: [f64; 4], stroke: bool| {
+        let paint = if stroke {
+            serde_json::json!({"ty": "st", "c": {"a": 0, "k": c}, "o": {"a": 0, "k": 100}, "w": {"a": 0, "k": 4}, "lc": 2, "lj": 2})
+        } else {
+            serde_json::json!({"ty": "fl", "c": {"a": 0, "k": c}, "o": {"a": 0, "k": 100}})
+        };
+        serde_json::json!([{"ty": "gr", "it": [
+            {"ty": "rc", "p": {"a": 0, "k": [50, 50]}, "s": {"a": 0, "k": [50, 50]}, "r": {"a": 0, "k": 0}},
+            paint,
+            {"ty": "tr", "p": {"a": 0, "k": [0, 0]}, "a": {"a": 0, "k": [0, 0]}, "s": {"a": 0, "k": [100, 100]},
+             "r": {"a": 0, "k": 0}, "o": {"a": 0, "k": 100}}]}])
+    };
+    let paper = [0.953, 0.929, 0.886, 1.0];
+    let layer = |ind: u32, nm: &str, shapes: serde_json::Value| serde_json::json!({"ty": 4, "nm": nm, "ind": ind, "ip": 0, "op": 4, "st": 0, "ks": {}, "shapes": shapes});
+    let doc = serde_json::json!({"v": "5.7.1", "fr": 12, "ip": 0, "op": 4, "w": 100, "h": 100, "layers": [
+        layer(1, "pale stroke", rect(paper, true)),
+        layer(2, "pale fill", rect(paper, false)),
+        {"ty": 1, "nm": "paper", "ind": 3, "ip": 0, "op": 4, "st": 0, "ks": {}, "sc": "#f3ede2", "sw": 100, "sh": 100}]});
+    let file = tmp.0.join("pale.json");
+    std::fs::write(&file, doc.to_string()).unwrap();
+    for (strokes, stroke_warned) in [("keep", false), ("drop", false), ("stylize", true)] {
+        let out = tmp.0.join(strokes);
+        let o = bin()
+            .args([os("render"), file.as_os_str(), os("-o"), out.as_os_str(), os("--frames"), os("1..2")])
+            .args(["--strokes", strokes])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{err}");
+        let warned = |name: &str| err.contains(&format!("layer '{name}' has the background's color"));
+        // A fill in the paper's color is glazed into the paper: always worth a warning. A
+        // stroke only when it is painted with the fill (stylized); kept or dropped, the glaze
+        // never shows its color.
+        assert!(warned("pale fill"), "{strokes}: {err}");
+        assert_eq!(warned("pale stroke"), stroke_warned, "{strokes}: {err}");
+    }
+}
+
+fn os(s: &str) -> &std::ffi::OsStr {
+    std::ffi::OsStr::new(s)
+}

@@ -411,6 +411,7 @@ pub fn file_options(
                 && !flat
                 && r.color[3] > 0.0
                 && (0..3).all(|i| (r.color[i] - p[i]).abs() < 0.02)
+                && (args.strokes == StrokeMode::Stylize || !strokes_only(anim, i))
             {
                 log::warn!(
                     "{}: layer '{}' has the background's color: a glaze of it does not show; \
@@ -425,6 +426,20 @@ pub fn file_options(
     opts.params = args.flags.params()?;
     opts.keep_layers = args.keep_layers;
     Ok(opts)
+}
+
+/// Whether region `i` draws strokes and no fill at the start, middle and end of its range: its
+/// color is then its stroke's ([`anim::Region::color`]), and unless strokes are stylized the
+/// glaze never shows that color (the strokes are drawn as they are, or dropped).
+fn strokes_only(anim: &Animation, i: usize) -> bool {
+    let r = &anim.regions[i];
+    if !r.has_strokes || r.visible.is_empty() {
+        return false;
+    }
+    let (a, b) = (r.visible.start, r.visible.end - 1);
+    [a, a + (b - a) / 2, b]
+        .iter()
+        .all(|&f| anim.render(i, f).is_ok_and(|rf| rf.coverage().data().iter().all(|&c| c <= 0.0)))
 }
 
 /// Warns when `dir` holds frames (`NNNN.png`) outside the range just rendered: left by an
