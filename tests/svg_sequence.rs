@@ -131,3 +131,88 @@ fn pattern_tiles_are_bounded_before_drawing() {
     assert!(text.contains("pattern tile") && text.contains("f1.svg"), "{text}");
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// The warnings of the animation and of all its regions.
+fn all_warnings(a: &anim::Animation) -> Vec<String> {
+    a.warnings.iter().chain(a.regions.iter().flat_map(|r| &r.warnings)).cloned().collect()
+}
+
+/// The one warning containing every one of `parts`.
+fn warning_with(warnings: &[String], parts: &[&str]) -> String {
+    let found: Vec<&String> = warnings.iter().filter(|w| parts.iter().all(|p| w.contains(p))).collect();
+    assert_eq!(found.len(), 1, "one warning with {parts:?} in {warnings:#?}");
+    found[0].clone()
+}
+
+#[test]
+fn warnings_name_the_frame_file_and_the_element() {
+    let d = dir("warnings");
+    for i in 1..=3 {
+        // Line 1 is the <svg> element; the body starts on line 2.
+        let mut body = String::from(
+            "\n<defs><filter id=\"blur\"><feGaussianBlur stdDeviation=\"2\"/></filter></defs>
+<g id=\"Body\"><rect id=\"r\" width=\"9\" height=\"9\" filter=\"url(#blur)\"/>
+<text id=\"title\" y=\"20\">Hi</text></g>\n",
+        );
+        if i != 2 {
+            body.push_str("<g id=\"arm\"><rect x=\"20\" width=\"5\" height=\"5\"/></g>\n");
+        } else {
+            body.push_str("<g id=\"fx\"><g><circle r=\"3\" style=\"fill:red;filter:url(#blur)\"/></g></g>\n");
+        }
+        if i == 1 {
+            body.push_str("<foreignObject id=\"html\" width=\"5\" height=\"5\"/>\n<frob/>\n");
+        }
+        if i == 3 {
+            // A nested <svg> draws like a shape: it belongs to the root layer, not ignored.
+            body.push_str(
+                "<svg id=\"inner\" x=\"30\" width=\"4\" height=\"4\"><rect width=\"4\" height=\"4\"/></svg>\n",
+            );
+        }
+        std::fs::write(d.join(format!("f{i}.svg")), frame(&body, 40, 40)).unwrap();
+    }
+    let a = anim::load(&d, &LoadOptions::default()).unwrap();
+    let w = all_warnings(&a);
+    let f1 = d.join("f1.svg").display().to_string();
+    let f2 = d.join("f2.svg").display().to_string();
+    // Each names the layer, the element by id (else its tag), the first frame file and the
+    // line there, what is wrong and what is done; repeated in later frames, counted.
+    let body = &a.regions[a.find_region("Body").unwrap()].warnings;
+    assert_eq!(
+        warning_with(body, &["<text id=\"title\">"]),
+        format!(
+            "layer 'Body': <text id=\"title\"> in '{f1}' line 4: SVG text is not drawn (no fonts are loaded); \
+             convert text to paths (also in 2 more frames)"
+        )
+    );
+    assert_eq!(
+        warning_with(body, &["<rect id=\"r\">"]),
+        format!(
+            "layer 'Body': <rect id=\"r\"> in '{f1}' line 3: its filter 'url(#blur)' is not drawn \
+             (SVG filters are ignored); drawn without (also in 2 more frames)"
+        )
+    );
+    // No id: the tag and the line; an inline style's filter too.
+    let fx = warning_with(&w, &["<circle>"]);
+    assert_eq!(
+        fx,
+        format!(
+            "layer 'fx': <circle> in '{f2}' line 5: its filter 'url(#blur)' is not drawn (SVG filters are ignored); \
+             drawn without"
+        )
+    );
+    // Outside any layer: in the animation's warnings.
+    let fo = warning_with(&a.warnings, &["<foreignObject id=\"html\">"]);
+    assert!(
+        fo.starts_with(&format!("<foreignObject id=\"html\"> in '{f1}' line 6: ")) && fo.contains("not drawn"),
+        "{fo}"
+    );
+    let frob = warning_with(&a.warnings, &["<frob>"]);
+    assert_eq!(frob, format!("<frob> in '{f1}' line 7: is not a group or a shape, so it is not a layer; ignored"));
+    assert!(!w.iter().any(|w| w.contains("<svg")), "{w:#?}");
+    let root = a.find_region("root").unwrap();
+    assert_eq!(a.render(root, 2).unwrap().fill.data().iter().filter(|c| c[3] > 0.99).count(), 16);
+    assert_eq!(a.render(a.find_region("Body").unwrap(), 2).unwrap().fill.get(31, 1)[3], 0.0);
+    // A layer missing in some frames names them.
+    let arm = warning_with(&w, &["layer 'arm'"]);
+    assert_eq!(arm, format!("layer 'arm' is missing from 1 frame of its range ('{f2}'); it is empty there"));
+}

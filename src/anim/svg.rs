@@ -23,6 +23,11 @@
 //! !important`) into [`RegionFrame::strokes`]. (Content inside `<mask>` elements is affected
 //! by those styles too.) Text is drawn only if fonts are available to usvg, which they are not
 //! by default: a warning says so. Frame rate: 24 fps (SVG files carry none).
+//!
+//! **Warnings** (what is not drawn as written: text, filters, `<foreignObject>`, top-level
+//! elements that are not layers) name the element (`<text id="title">`, or its tag), the
+//! frame file and line where it is first seen, and how many more frames have it; those inside
+//! a layer are that [`Region`]'s warnings, the others the [`Animation`]'s (see `checks`).
 
 use super::{Animation, LoadOptions, MAX_FRAMES, MAX_SIDE, Region, RegionFrame, RegionKind, RegionRenderer};
 use crate::error::{Error, Result};
@@ -31,6 +36,8 @@ use std::collections::HashMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 use usvg::roxmltree;
+
+mod checks;
 
 const INKSCAPE_NS: &str = "http://www.inkscape.org/namespaces/inkscape";
 /// Name of the region that gathers top-level shapes outside any group.
@@ -51,6 +58,7 @@ fn is_shape(tag: &str) -> bool {
             | "image"
             | "switch"
             | "a"
+            | "svg"
     )
 }
 
@@ -58,6 +66,8 @@ fn is_shape(tag: &str) -> bool {
 #[derive(Clone, Debug)]
 struct TopLevel {
     name: String,
+    /// The element in the document it was found in.
+    node: roxmltree::NodeId,
     range: Range<usize>,
     /// Something inside sets a stroke other than `none`.
     strokes: bool,
@@ -215,28 +225,24 @@ fn check_numbers(path: &Path, doc: &roxmltree::Document) -> Result<()> {
 struct FrameInfo {
     /// The layers, bottom first.
     layers: Vec<TopLevel>,
-    /// Whether it has `<text>` (not rendered).
-    has_text: bool,
     /// Whether the root `<svg>` says its size: a `viewBox`, or both `width` and `height`.
     has_size: bool,
 }
 
 /// The layers of one frame, bottom first, and what else the loader checks in it.
 fn top_level(path: &Path, text: &str) -> Result<FrameInfo> {
-    let doc = parse_xml(path, text)?;
-    check_numbers(path, &doc)?;
+    frame_info(path, &parse_xml(path, text)?)
+}
+
+/// [`top_level`] of a parsed frame.
+fn frame_info(path: &Path, doc: &roxmltree::Document) -> Result<FrameInfo> {
+    check_numbers(path, doc)?;
     let root = doc.root_element();
     if root.tag_name().name() != "svg" {
         return Err(Error::animation(path, "the root element is not <svg>"));
     }
     let mut out = Vec::new();
     let mut groups = 0;
-    let mut has_text = false;
-    for node in root.descendants() {
-        if node.is_element() && node.tag_name().name() == "text" {
-            has_text = true;
-        }
-    }
     for child in root.children().filter(|c| c.is_element()) {
         let tag = child.tag_name().name();
         let name = if tag == "g" {
@@ -254,10 +260,10 @@ fn top_level(path: &Path, text: &str) -> Result<FrameInfo> {
         } else {
             continue;
         };
-        out.push(TopLevel { name, range: child.range(), strokes: sets_stroke(child) });
+        out.push(TopLevel { name, node: child.id(), range: child.range(), strokes: sets_stroke(child) });
     }
     let has_size = root.has_attribute("viewBox") || (root.has_attribute("width") && root.has_attribute("height"));
-    Ok(FrameInfo { layers: out, has_text, has_size })
+    Ok(FrameInfo { layers: out, has_size })
 }
 
 /// The document with every top-level element not named `keep` hidden.
@@ -368,8 +374,7 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
     let mut order: Vec<String> = Vec::new();
     let mut frames_of: HashMap<String, Vec<usize>> = HashMap::new();
     let mut stroked: Vec<String> = Vec::new();
-    let mut any_text = false;
-    let mut any_filter = false;
+    let mut findings = checks::Findings::default();
     // The largest pattern tile of any frame (pixels at scale 1) and its frame.
     let mut tile: Option<(f64, &PathBuf)> = None;
     for (f, path) in files.iter().enumerate() {
@@ -377,9 +382,9 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
         if text.trim().is_empty() {
             return Err(Error::Empty { path: path.clone(), what: "the SVG file is empty".into() });
         }
-        let FrameInfo { layers, has_text, has_size } = top_level(path, &text)?;
-        any_text |= has_text;
-        any_filter |= text.contains("<filter");
+        let doc = parse_xml(path, &text)?;
+        let FrameInfo { layers, has_size } = frame_info(path, &doc)?;
+        findings.add(path, checks::frame(&doc, &layers));
         let tree = usvg::Tree::from_str(&text, &opt).map_err(|e| Error::animation(path, format!("SVG: {e}")))?;
         let s = (tree.size().width(), tree.size().height());
         if !has_size {
@@ -473,15 +478,7 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
             });
         }
     }
-    let mut warnings = Vec::new();
-    if any_text {
-        let msg = "SVG text is not rendered (no fonts are loaded); convert text to paths".to_string();
-        warnings.push(msg);
-    }
-    if any_filter {
-        let msg = "SVG filters (blur, shadows, …) are not drawn; ignored".to_string();
-        warnings.push(msg);
-    }
+    let warnings = findings.warnings(None);
     let names: Vec<String> = order.into_iter().rev().collect();
     let frames = files.len();
     let strokes = names.iter().map(|n| stroked.contains(n)).collect();
@@ -495,8 +492,19 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
             let visible = fr[0]..fr[fr.len() - 1] + 1;
             let mut warnings = Vec::new();
             if fr.len() < visible.len() {
-                warnings.push(format!("layer '{name}' is missing in {} frames of its range", visible.len() - fr.len()));
+                let missing: Vec<usize> = visible.clone().filter(|f| fr.binary_search(f).is_err()).collect();
+                let mut list: Vec<String> =
+                    missing.iter().take(3).map(|&f| format!("'{}'", renderer.files[f].display())).collect();
+                if missing.len() > 3 {
+                    list.push(format!("{} more", missing.len() - 3));
+                }
+                let (n, s) = (missing.len(), if missing.len() == 1 { "" } else { "s" });
+                warnings.push(format!(
+                    "layer '{name}' is missing from {n} frame{s} of its range ({}); it is empty there",
+                    list.join(", ")
+                ));
             }
+            warnings.extend(findings.warnings(Some(name)));
             Region {
                 index: i + 1,
                 name: name.clone(),
