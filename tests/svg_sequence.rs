@@ -216,3 +216,54 @@ fn warnings_name_the_frame_file_and_the_element() {
     let arm = warning_with(&w, &["layer 'arm'"]);
     assert_eq!(arm, format!("layer 'arm' is missing from 1 frame of its range ('{f2}'); it is empty there"));
 }
+
+#[test]
+fn broken_images_are_warned_about_naming_the_frame_and_the_image() {
+    let d = dir("images");
+    let mut png = Vec::new();
+    image::RgbaImage::from_pixel(4, 4, image::Rgba([255, 0, 0, 255]))
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    std::fs::write(d.join("ok.png"), &png).unwrap();
+    std::fs::write(d.join("cut.png"), &png[..png.len() / 2]).unwrap();
+    std::fs::write(d.join("notes.png"), "not an image").unwrap();
+    let body = "
+<g id=\"pics\"><image id=\"ok\" href=\"ok.png\" width=\"4\" height=\"4\"/>
+<image id=\"gone\" href=\"missing.png\" width=\"4\" height=\"4\"/>
+<image id=\"cut\" href=\"cut.png\" width=\"4\" height=\"4\"/>
+<image xmlns:xlink=\"http://www.w3.org/1999/xlink\" xlink:href=\"notes.png\" width=\"4\" height=\"4\"/>
+<image id=\"nohref\" width=\"4\" height=\"4\"/>
+<image id=\"data\" href=\"data:image/png;base64,iVBORw0KGgo=\" width=\"4\" height=\"4\"/>
+<image id=\"web\" href=\"https://example.com/a.png\" width=\"4\" height=\"4\"/></g>";
+    for i in 1..=2 {
+        std::fs::write(d.join(format!("f{i}.svg")), frame(body, 10, 10)).unwrap();
+    }
+    let a = anim::load(&d, &LoadOptions::default()).unwrap();
+    let pics = a.find_region("pics").unwrap();
+    let w = &a.regions[pics].warnings;
+    let f1 = d.join("f1.svg").display().to_string();
+    let missing = d.join("missing.png").display().to_string();
+    assert_eq!(
+        warning_with(w, &["<image id=\"gone\">"]),
+        format!(
+            "layer 'pics': <image id=\"gone\"> in '{f1}' line 3: broken image: 'missing.png' was not found \
+             (looked for '{missing}'); not drawn (also in 1 more frame)"
+        )
+    );
+    let cut = warning_with(w, &["<image id=\"cut\">", &f1, "line 4"]);
+    assert!(
+        cut.contains("broken image: 'cut.png' is not a readable PNG image (")
+            && cut.ends_with("; not drawn (also in 1 more frame)"),
+        "{cut}"
+    );
+    // No id: the tag and the line, and the href says which.
+    let notes = warning_with(w, &["<image>", &f1, "line 5"]);
+    assert!(notes.contains("'notes.png' is not a PNG, JPEG, GIF, WebP or SVG image; not drawn"), "{notes}");
+    warning_with(w, &["<image id=\"nohref\">", "line 6", "broken image: has no href; not drawn"]);
+    warning_with(w, &["<image id=\"data\">", "line 7", "broken image: its data: URL is not a readable PNG image"]);
+    warning_with(w, &["<image id=\"web\">", "line 8", "'https://example.com/a.png' is a URL"]);
+    assert!(!w.iter().any(|w| w.contains("\"ok\"")), "{w:#?}");
+    assert_eq!(w.len(), 6, "{w:#?}");
+    // The good image is drawn.
+    assert!(a.render(pics, 0).unwrap().fill.get(1, 1)[3] > 0.99);
+}

@@ -24,8 +24,9 @@
 //! by those styles too.) Text is drawn only if fonts are available to usvg, which they are not
 //! by default: a warning says so. Frame rate: 24 fps (SVG files carry none).
 //!
-//! **Warnings** (what is not drawn as written: text, filters, `<foreignObject>`, top-level
-//! elements that are not layers) name the element (`<text id="title">`, or its tag), the
+//! **Warnings** (what is not drawn as written: text, filters, `<foreignObject>`, an `<image>`
+//! whose href is missing, not found, unreadable or not a decodable image, top-level elements
+//! that are not layers) name the element (`<text id="title">`, or its tag), the
 //! frame file and line where it is first seen, and how many more frames have it; those inside
 //! a layer are that [`Region`]'s warnings, the others the [`Animation`]'s (see `checks`).
 
@@ -375,6 +376,7 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
     let mut frames_of: HashMap<String, Vec<usize>> = HashMap::new();
     let mut stroked: Vec<String> = Vec::new();
     let mut findings = checks::Findings::default();
+    let mut images = checks::ImageCache::default();
     // The largest pattern tile of any frame (pixels at scale 1) and its frame.
     let mut tile: Option<(f64, &PathBuf)> = None;
     for (f, path) in files.iter().enumerate() {
@@ -384,7 +386,7 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
         }
         let doc = parse_xml(path, &text)?;
         let FrameInfo { layers, has_size } = frame_info(path, &doc)?;
-        findings.add(path, checks::frame(&doc, &layers));
+        findings.add(path, checks::frame(path, &doc, &layers, &mut images));
         let tree = usvg::Tree::from_str(&text, &opt).map_err(|e| Error::animation(path, format!("SVG: {e}")))?;
         let s = (tree.size().width(), tree.size().height());
         if !has_size {

@@ -1,5 +1,5 @@
 //! What one SVG frame holds that will not be drawn as written: text (no fonts), filters,
-//! `<foreignObject>`, top-level elements that are neither layers nor
+//! `<foreignObject>`, broken `<image>`s, top-level elements that are neither layers nor
 //! definitions. Each is a [`Finding`] naming the element (its id, else its tag, and its line)
 //! and the layer it is in; the loader gathers them over the frames into warnings that also
 //! name the frame file (see [`Findings`]).
@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use usvg::roxmltree::{self, Node, NodeId};
 
 const SVG_NS: &str = "http://www.w3.org/2000/svg";
+const XLINK_NS: &str = "http://www.w3.org/1999/xlink";
 
 /// Longest id or href quoted in a message, characters (a data: URL can be megabytes).
 const MAX_QUOTE: usize = 48;
@@ -96,8 +97,126 @@ fn filter_of<'a>(node: Node<'a, '_>) -> Option<&'a str> {
     style.or(attr).filter(|v| !v.is_empty() && *v != "none")
 }
 
+/// Whether an `<image>`'s content is missing or broken, by the resolved file or data, so that
+/// an image used by every frame is read once.
+#[derive(Default)]
+pub struct ImageCache {
+    checked: HashMap<u64, Option<String>>,
+}
+
+impl ImageCache {
+    /// Why the image that `href` names (relative paths from `dir`) is not drawn, if it is not.
+    fn problem(&mut self, href: &str, dir: &Path) -> Option<String> {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        (href, dir).hash(&mut h);
+        let key = h.finish();
+        if let Some(p) = self.checked.get(&key) {
+            return p.clone();
+        }
+        let p = image_problem(href, dir);
+        self.checked.insert(key, p.clone());
+        p
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Kind {
+    Raster(image::ImageFormat),
+    Webp,
+    Svg,
+}
+
+/// The image kind by magic bytes, as usvg tells them apart.
+fn sniff(data: &[u8]) -> Option<Kind> {
+    if data.starts_with(b"\x89PNG\r\n\x1a\n") {
+        Some(Kind::Raster(image::ImageFormat::Png))
+    } else if data.starts_with(b"\xff\xd8\xff") {
+        Some(Kind::Raster(image::ImageFormat::Jpeg))
+    } else if data.starts_with(b"GIF87a") || data.starts_with(b"GIF89a") {
+        Some(Kind::Raster(image::ImageFormat::Gif))
+    } else if data.len() >= 12 && &data[..4] == b"RIFF" && &data[8..12] == b"WEBP" {
+        Some(Kind::Webp)
+    } else {
+        None
+    }
+}
+
+/// Why the image that `href` names is not drawn, or `None` when it is readable. Follows
+/// usvg's resolution: a `data:` URL by its MIME type (or its bytes, for `text/plain`), else a
+/// file path relative to the frame's folder, by its extension (`.svg`, `.svgz`) or its bytes.
+/// PNG, JPEG and GIF are decoded in full (a damaged file is found only so); WebP is checked by
+/// its signature only.
+fn image_problem(href: &str, dir: &Path) -> Option<String> {
+    let (data, kind, name) = if let Ok(url) = data_url::DataUrl::process(href) {
+        let name = "its data: URL".to_string();
+        let Ok((data, _)) = url.decode_to_vec() else {
+            return Some(format!("{name} does not decode (bad base64)"));
+        };
+        let mime = format!("{}/{}", url.mime_type().type_, url.mime_type().subtype);
+        let kind = match mime.as_str() {
+            "image/jpg" | "image/jpeg" => Some(Kind::Raster(image::ImageFormat::Jpeg)),
+            "image/png" => Some(Kind::Raster(image::ImageFormat::Png)),
+            "image/gif" => Some(Kind::Raster(image::ImageFormat::Gif)),
+            "image/webp" => Some(Kind::Webp),
+            "image/svg+xml" => Some(Kind::Svg),
+            "text/plain" => Some(sniff(&data).unwrap_or(Kind::Svg)),
+            _ => None,
+        };
+        let Some(kind) = kind else {
+            return Some(format!("{name} has type '{mime}', not PNG, JPEG, GIF, WebP or SVG"));
+        };
+        (data, kind, name)
+    } else {
+        let name = quote(href);
+        if href.contains("://") {
+            return Some(format!(
+                "{name} is a URL; only files (relative to the frame's folder) and data: URLs are read"
+            ));
+        }
+        let path = dir.join(href);
+        let data = match std::fs::read(&path) {
+            Ok(d) => d,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                return Some(format!("{name} was not found (looked for '{}')", path.display()));
+            }
+            Err(e) => return Some(format!("{name} could not be read ({e})")),
+        };
+        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_lowercase);
+        let kind = if matches!(ext.as_deref(), Some("svg" | "svgz")) { Some(Kind::Svg) } else { sniff(&data) };
+        let Some(kind) = kind else {
+            return Some(format!("{name} is not a PNG, JPEG, GIF, WebP or SVG image"));
+        };
+        (data, kind, name)
+    };
+    match kind {
+        Kind::Raster(format) => {
+            let what = format!("{format:?}").to_uppercase();
+            match crate::img::decode(&data, Path::new("image"), crate::img::MAX_IMAGE_SIDE) {
+                // Too large to check here, which does not make it broken.
+                Ok(_) | Err(crate::error::Error::Limit { .. }) => None,
+                Err(e) => Some(format!("{name} is not a readable {what} image ({})", short_cause(&e))),
+            }
+        }
+        Kind::Webp => None,
+        Kind::Svg => match usvg::Tree::from_data(&data, &usvg::Options::default()) {
+            Ok(_) => None,
+            Err(e) => Some(format!("{name} is not a readable SVG image ({e})")),
+        },
+    }
+}
+
+/// The decoder's message, without the file (the warning names it already).
+fn short_cause(e: &crate::error::Error) -> String {
+    match e {
+        crate::error::Error::Image { message, .. } => message.clone(),
+        e => e.to_string(),
+    }
+}
+
 /// The findings of one frame (`path`, parsed as `doc`, with its layers `layers`).
-pub fn frame(doc: &roxmltree::Document, layers: &[TopLevel]) -> Vec<Finding> {
+pub fn frame(path: &Path, doc: &roxmltree::Document, layers: &[TopLevel], images: &mut ImageCache) -> Vec<Finding> {
+    let dir = path.parent().unwrap_or(Path::new(""));
     let layer_of: HashMap<NodeId, &str> = layers.iter().map(|l| (l.node, l.name.as_str())).collect();
     let mut out = Vec::new();
     let mut add = |node: Node, layer: Option<&str>, what: String| {
@@ -125,6 +244,16 @@ pub fn frame(doc: &roxmltree::Document, layers: &[TopLevel]) -> Vec<Finding> {
                     layer,
                     "sets a filter in CSS; SVG filters (blur, shadows, …) are not drawn; drawn without".into(),
                 ),
+                "image" => {
+                    let href = node.attribute((XLINK_NS, "href")).or_else(|| node.attribute("href"));
+                    let problem = match href.map(str::trim).filter(|h| !h.is_empty()) {
+                        None => Some("has no href".to_string()),
+                        Some(h) => images.problem(h, dir),
+                    };
+                    if let Some(p) = problem {
+                        add(node, layer, format!("broken image: {p}; not drawn"));
+                    }
+                }
                 _ => {}
             }
             if let Some(f) = filter_of(node) {
