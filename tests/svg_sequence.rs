@@ -267,3 +267,51 @@ fn broken_images_are_warned_about_naming_the_frame_and_the_image() {
     // The good image is drawn.
     assert!(a.render(pics, 0).unwrap().fill.get(1, 1)[3] > 0.99);
 }
+
+#[test]
+fn groups_sharing_a_name_stay_distinct_layers() {
+    let d = dir("dup-ids");
+    for i in 1..=3 {
+        let mut body = String::from("\n<g id=\"arm\"><rect width=\"5\" height=\"5\"/></g>\n");
+        if i != 3 {
+            body.push_str("<g id=\"arm\"><rect x=\"20\" width=\"5\" height=\"5\"/></g>\n");
+        }
+        std::fs::write(d.join(format!("f{i}.svg")), frame(&body, 40, 40)).unwrap();
+    }
+    let a = anim::load(&d, &LoadOptions::default()).unwrap();
+    let names: Vec<&str> = a.regions.iter().map(|r| r.name.as_str()).collect();
+    assert_eq!(names, ["arm (2)", "arm"]);
+    let (first, second) = (a.find_region("arm").unwrap(), a.find_region("arm (2)").unwrap());
+    let fr = a.render(first, 0).unwrap();
+    assert!(fr.fill.get(1, 1)[3] > 0.99 && fr.fill.get(21, 1)[3] == 0.0, "the first group alone");
+    let fr = a.render(second, 1).unwrap();
+    assert!(fr.fill.get(1, 1)[3] == 0.0 && fr.fill.get(21, 1)[3] > 0.99, "the second group alone");
+    assert_eq!((a.regions[first].visible.clone(), a.regions[second].visible.clone()), (0..3, 0..2));
+    let f1 = d.join("f1.svg").display().to_string();
+    assert_eq!(
+        a.regions[second].warnings,
+        [format!(
+            "layer 'arm (2)': <g id=\"arm\"> in '{f1}' line 3: an earlier top-level group in this frame is also \
+             named 'arm'; kept apart as layer 'arm (2)', not merged (groups sharing a name are told apart by their \
+             order in each frame) (also in 1 more frame)"
+        )]
+    );
+    assert!(a.regions[first].warnings.is_empty(), "{:?}", a.regions[first].warnings);
+
+    // A group itself named like a renamed one: refused, naming the frame, in one frame or
+    // across frames.
+    let d = dir("dup-clash");
+    let body = "<g id=\"arm\"/><g id=\"arm\"/><g inkscape:label=\"arm (2)\"><rect width=\"5\" height=\"5\"/></g>";
+    std::fs::write(d.join("f1.svg"), frame(body, 40, 40)).unwrap();
+    let e = anim::load(&d, &LoadOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("f1.svg") && e.contains("'arm (2)'") && e.contains("distinct ids or labels"), "{e}");
+    let d = dir("dup-clash-frames");
+    std::fs::write(
+        d.join("f1.svg"),
+        frame("<g inkscape:label=\"arm (2)\"><rect width=\"5\" height=\"5\"/></g>", 40, 40),
+    )
+    .unwrap();
+    std::fs::write(d.join("f2.svg"), frame("<g id=\"arm\"/><g id=\"arm\"/>", 40, 40)).unwrap();
+    let e = anim::load(&d, &LoadOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("f1.svg") && e.contains("f2.svg") && e.contains("'arm (2)'"), "{e}");
+}

@@ -5,11 +5,13 @@
 //! `inkscape:label` when it has one (Inkscape also gives every layer an automatic `id` such as
 //! `layer1`, so the label is the name the designer chose), else by its `id`, else
 //! `layer N` (N = its position among the top-level groups that have neither, from 1, so that
-//! named groups coming and going do not renumber it). Top-level shapes outside
-//! any group (`path`, `rect`, `circle`, `text`, `use`, …) are gathered into **one** region
-//! named `root`, drawn in document order, because a stray shape rarely deserves a layer of
-//! its own and frame-to-frame identity of unnamed shapes is not knowable. `defs`, `style`,
-//! metadata and similar are not layers.
+//! named groups coming and going do not renumber it). Groups of a frame that share a name
+//! are not merged: the second is layer `name (2)`, the third `name (3)`, in every frame (a
+//! warning says so; files where a group is itself named like that are refused). Top-level
+//! shapes outside any group (`path`, `rect`, `circle`, `text`, `use`, …) are gathered into
+//! **one** region named `root`, drawn in document order, because a stray shape rarely
+//! deserves a layer of its own and frame-to-frame identity of unnamed shapes is not knowable.
+//! `defs`, `style`, metadata and similar are not layers.
 //!
 //! **Identity across frames** is by name: a layer keeps its region wherever it appears in the
 //! sequence, and is invisible (empty) in frames that lack it. Its `visible` range runs from the
@@ -222,10 +224,22 @@ fn check_numbers(path: &Path, doc: &roxmltree::Document) -> Result<()> {
     Ok(())
 }
 
+/// A top-level group that another group before it in the same frame is named like: it is
+/// kept as a layer of its own, named `name (k)` for the k-th such group.
+struct Renamed {
+    node: roxmltree::NodeId,
+    /// The name the groups share.
+    name: String,
+    /// The k of `name (k)`.
+    k: usize,
+}
+
 /// What [`top_level`] finds in one frame.
 struct FrameInfo {
     /// The layers, bottom first.
     layers: Vec<TopLevel>,
+    /// The groups renamed because an earlier group has the same name.
+    renamed: Vec<Renamed>,
     /// Whether the root `<svg>` says its size: a `viewBox`, or both `width` and `height`.
     has_size: bool,
 }
@@ -242,8 +256,11 @@ fn frame_info(path: &Path, doc: &roxmltree::Document) -> Result<FrameInfo> {
     if root.tag_name().name() != "svg" {
         return Err(Error::animation(path, "the root element is not <svg>"));
     }
-    let mut out = Vec::new();
+    let mut out: Vec<TopLevel> = Vec::new();
     let mut groups = 0;
+    // Per group name, how many groups have it so far; the groups renamed.
+    let mut seen: HashMap<String, usize> = HashMap::new();
+    let mut renamed = Vec::new();
     for child in root.children().filter(|c| c.is_element()) {
         let tag = child.tag_name().name();
         let name = if tag == "g" {
@@ -252,10 +269,18 @@ fn frame_info(path: &Path, doc: &roxmltree::Document) -> Result<FrameInfo> {
                 .or_else(|| child.attribute("id"))
                 .map(str::to_string)
                 .filter(|s| !s.trim().is_empty());
-            named.unwrap_or_else(|| {
+            let name = named.unwrap_or_else(|| {
                 groups += 1;
                 format!("layer {groups}")
-            })
+            });
+            let k = seen.entry(name.clone()).or_insert(0);
+            *k += 1;
+            if *k > 1 {
+                renamed.push(Renamed { node: child.id(), name: name.clone(), k: *k });
+                format!("{name} ({k})")
+            } else {
+                name
+            }
         } else if is_shape(tag) {
             ROOT_LAYER.to_string()
         } else {
@@ -263,8 +288,25 @@ fn frame_info(path: &Path, doc: &roxmltree::Document) -> Result<FrameInfo> {
         };
         out.push(TopLevel { name, node: child.id(), range: child.range(), strokes: sets_stroke(child) });
     }
+    // A group renamed `arm (2)` must not meet a group named so in the file.
+    for r in &renamed {
+        let unique = format!("{} ({})", r.name, r.k);
+        if let Some(other) = out.iter().find(|l| l.name == unique && l.node != r.node) {
+            let line = |id| doc.text_pos_at(doc.get_node(id).map_or(0, |n| n.range().start)).row;
+            return Err(Error::animation(
+                path,
+                format!(
+                    "top-level groups share the name '{}', so the one at line {} would be layer '{unique}', but the \
+                     group at line {} is named so already; give the groups distinct ids or labels",
+                    r.name,
+                    line(r.node),
+                    line(other.node),
+                ),
+            ));
+        }
+    }
     let has_size = root.has_attribute("viewBox") || (root.has_attribute("width") && root.has_attribute("height"));
-    Ok(FrameInfo { layers: out, has_size })
+    Ok(FrameInfo { layers: out, renamed, has_size })
 }
 
 /// The document with every top-level element not named `keep` hidden.
@@ -377,6 +419,10 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
     let mut stroked: Vec<String> = Vec::new();
     let mut findings = checks::Findings::default();
     let mut images = checks::ImageCache::default();
+    // Layer names given to groups sharing a name (`arm (2)`), and names found in the files,
+    // each with the first frame that has it: no name may be both.
+    let mut made_unique: HashMap<String, PathBuf> = HashMap::new();
+    let mut named_so: HashMap<String, PathBuf> = HashMap::new();
     // The largest pattern tile of any frame (pixels at scale 1) and its frame.
     let mut tile: Option<(f64, &PathBuf)> = None;
     for (f, path) in files.iter().enumerate() {
@@ -385,8 +431,28 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
             return Err(Error::Empty { path: path.clone(), what: "the SVG file is empty".into() });
         }
         let doc = parse_xml(path, &text)?;
-        let FrameInfo { layers, has_size } = frame_info(path, &doc)?;
-        findings.add(path, checks::frame(path, &doc, &layers, &mut images));
+        let FrameInfo { layers, renamed, has_size } = frame_info(path, &doc)?;
+        let mut found = checks::frame(path, &doc, &layers, &mut images);
+        for r in &renamed {
+            let unique = format!("{} ({})", r.name, r.k);
+            made_unique.entry(unique.clone()).or_insert_with(|| path.clone());
+            if let Some(node) = doc.get_node(r.node) {
+                found.push(checks::Finding {
+                    layer: Some(unique.clone()),
+                    element: checks::describe(node),
+                    line: checks::line_of(&doc, node),
+                    what: format!(
+                        "an earlier top-level group in this frame is also named '{}'; kept apart as layer \
+                         '{unique}', not merged (groups sharing a name are told apart by their order in each frame)",
+                        r.name
+                    ),
+                });
+            }
+        }
+        for l in layers.iter().filter(|l| !renamed.iter().any(|r| r.node == l.node)) {
+            named_so.entry(l.name.clone()).or_insert_with(|| path.clone());
+        }
+        findings.add(path, found);
         let tree = usvg::Tree::from_str(&text, &opt).map_err(|e| Error::animation(path, format!("SVG: {e}")))?;
         let s = (tree.size().width(), tree.size().height());
         if !has_size {
@@ -460,6 +526,18 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
         }
     }
     let (w, h) = size.ok_or_else(|| Error::Empty { path: input.to_path_buf(), what: "no SVG frames".into() })?;
+    let mut clashes: Vec<(&String, &PathBuf)> = made_unique.iter().filter(|(n, _)| named_so.contains_key(*n)).collect();
+    clashes.sort();
+    if let Some((name, renamed_in)) = clashes.first() {
+        return Err(Error::animation(
+            &named_so[*name],
+            format!(
+                "a top-level group is named '{name}', which is also the layer name given in '{}' to a group sharing \
+                 its name with an earlier one; give the groups distinct ids or labels",
+                renamed_in.display()
+            ),
+        ));
+    }
     if order.is_empty() {
         return Err(Error::Empty {
             path: input.to_path_buf(),
