@@ -131,3 +131,187 @@ fn pattern_tiles_are_bounded_before_drawing() {
     assert!(text.contains("pattern tile") && text.contains("f1.svg"), "{text}");
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// The warnings of the animation and of all its regions.
+fn all_warnings(a: &anim::Animation) -> Vec<String> {
+    a.warnings.iter().chain(a.regions.iter().flat_map(|r| &r.warnings)).cloned().collect()
+}
+
+/// The one warning containing every one of `parts`.
+fn warning_with(warnings: &[String], parts: &[&str]) -> String {
+    let found: Vec<&String> = warnings.iter().filter(|w| parts.iter().all(|p| w.contains(p))).collect();
+    assert_eq!(found.len(), 1, "one warning with {parts:?} in {warnings:#?}");
+    found[0].clone()
+}
+
+#[test]
+fn warnings_name_the_frame_file_and_the_element() {
+    let d = dir("warnings");
+    for i in 1..=3 {
+        // Line 1 is the <svg> element; the body starts on line 2.
+        let mut body = String::from(
+            "\n<defs><filter id=\"blur\"><feGaussianBlur stdDeviation=\"2\"/></filter></defs>
+<g id=\"Body\"><rect id=\"r\" width=\"9\" height=\"9\" filter=\"url(#blur)\"/>
+<text id=\"title\" y=\"20\">Hi</text></g>\n",
+        );
+        if i != 2 {
+            body.push_str("<g id=\"arm\"><rect x=\"20\" width=\"5\" height=\"5\"/></g>\n");
+        } else {
+            body.push_str("<g id=\"fx\"><g><circle r=\"3\" style=\"fill:red;filter:url(#blur)\"/></g></g>\n");
+        }
+        if i == 1 {
+            body.push_str("<foreignObject id=\"html\" width=\"5\" height=\"5\"/>\n<frob/>\n");
+        }
+        if i == 3 {
+            // A nested <svg> draws like a shape: it belongs to the root layer, not ignored.
+            body.push_str(
+                "<svg id=\"inner\" x=\"30\" width=\"4\" height=\"4\"><rect width=\"4\" height=\"4\"/></svg>\n",
+            );
+        }
+        std::fs::write(d.join(format!("f{i}.svg")), frame(&body, 40, 40)).unwrap();
+    }
+    let a = anim::load(&d, &LoadOptions::default()).unwrap();
+    let w = all_warnings(&a);
+    let f1 = d.join("f1.svg").display().to_string();
+    let f2 = d.join("f2.svg").display().to_string();
+    // Each names the layer, the element by id (else its tag), the first frame file and the
+    // line there, what is wrong and what is done; repeated in later frames, counted.
+    let body = &a.regions[a.find_region("Body").unwrap()].warnings;
+    assert_eq!(
+        warning_with(body, &["<text id=\"title\">"]),
+        format!(
+            "layer 'Body': <text id=\"title\"> in '{f1}' line 4: SVG text is not drawn (no fonts are loaded); \
+             convert text to paths (also in 2 more frames)"
+        )
+    );
+    assert_eq!(
+        warning_with(body, &["<rect id=\"r\">"]),
+        format!(
+            "layer 'Body': <rect id=\"r\"> in '{f1}' line 3: its filter 'url(#blur)' is not drawn \
+             (SVG filters are ignored); drawn without (also in 2 more frames)"
+        )
+    );
+    // No id: the tag and the line; an inline style's filter too.
+    let fx = warning_with(&w, &["<circle>"]);
+    assert_eq!(
+        fx,
+        format!(
+            "layer 'fx': <circle> in '{f2}' line 5: its filter 'url(#blur)' is not drawn (SVG filters are ignored); \
+             drawn without"
+        )
+    );
+    // Outside any layer: in the animation's warnings.
+    let fo = warning_with(&a.warnings, &["<foreignObject id=\"html\">"]);
+    assert!(
+        fo.starts_with(&format!("<foreignObject id=\"html\"> in '{f1}' line 6: ")) && fo.contains("not drawn"),
+        "{fo}"
+    );
+    let frob = warning_with(&a.warnings, &["<frob>"]);
+    assert_eq!(frob, format!("<frob> in '{f1}' line 7: is not a group or a shape, so it is not a layer; ignored"));
+    assert!(!w.iter().any(|w| w.contains("<svg")), "{w:#?}");
+    let root = a.find_region("root").unwrap();
+    assert_eq!(a.render(root, 2).unwrap().fill.data().iter().filter(|c| c[3] > 0.99).count(), 16);
+    assert_eq!(a.render(a.find_region("Body").unwrap(), 2).unwrap().fill.get(31, 1)[3], 0.0);
+    // A layer missing in some frames names them.
+    let arm = warning_with(&w, &["layer 'arm'"]);
+    assert_eq!(arm, format!("layer 'arm' is missing from 1 frame of its range ('{f2}'); it is empty there"));
+}
+
+#[test]
+fn broken_images_are_warned_about_naming_the_frame_and_the_image() {
+    let d = dir("images");
+    let mut png = Vec::new();
+    image::RgbaImage::from_pixel(4, 4, image::Rgba([255, 0, 0, 255]))
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    std::fs::write(d.join("ok.png"), &png).unwrap();
+    std::fs::write(d.join("cut.png"), &png[..png.len() / 2]).unwrap();
+    std::fs::write(d.join("notes.png"), "not an image").unwrap();
+    let body = "
+<g id=\"pics\"><image id=\"ok\" href=\"ok.png\" width=\"4\" height=\"4\"/>
+<image id=\"gone\" href=\"missing.png\" width=\"4\" height=\"4\"/>
+<image id=\"cut\" href=\"cut.png\" width=\"4\" height=\"4\"/>
+<image xmlns:xlink=\"http://www.w3.org/1999/xlink\" xlink:href=\"notes.png\" width=\"4\" height=\"4\"/>
+<image id=\"nohref\" width=\"4\" height=\"4\"/>
+<image id=\"data\" href=\"data:image/png;base64,iVBORw0KGgo=\" width=\"4\" height=\"4\"/>
+<image id=\"web\" href=\"https://example.com/a.png\" width=\"4\" height=\"4\"/></g>";
+    for i in 1..=2 {
+        std::fs::write(d.join(format!("f{i}.svg")), frame(body, 10, 10)).unwrap();
+    }
+    let a = anim::load(&d, &LoadOptions::default()).unwrap();
+    let pics = a.find_region("pics").unwrap();
+    let w = &a.regions[pics].warnings;
+    let f1 = d.join("f1.svg").display().to_string();
+    let missing = d.join("missing.png").display().to_string();
+    assert_eq!(
+        warning_with(w, &["<image id=\"gone\">"]),
+        format!(
+            "layer 'pics': <image id=\"gone\"> in '{f1}' line 3: broken image: 'missing.png' was not found \
+             (looked for '{missing}'); not drawn (also in 1 more frame)"
+        )
+    );
+    let cut = warning_with(w, &["<image id=\"cut\">", &f1, "line 4"]);
+    assert!(
+        cut.contains("broken image: 'cut.png' is not a readable PNG image (")
+            && cut.ends_with("; not drawn (also in 1 more frame)"),
+        "{cut}"
+    );
+    // No id: the tag and the line, and the href says which.
+    let notes = warning_with(w, &["<image>", &f1, "line 5"]);
+    assert!(notes.contains("'notes.png' is not a PNG, JPEG, GIF, WebP or SVG image; not drawn"), "{notes}");
+    warning_with(w, &["<image id=\"nohref\">", "line 6", "broken image: has no href; not drawn"]);
+    warning_with(w, &["<image id=\"data\">", "line 7", "broken image: its data: URL is not a readable PNG image"]);
+    warning_with(w, &["<image id=\"web\">", "line 8", "'https://example.com/a.png' is a URL"]);
+    assert!(!w.iter().any(|w| w.contains("\"ok\"")), "{w:#?}");
+    assert_eq!(w.len(), 6, "{w:#?}");
+    // The good image is drawn.
+    assert!(a.render(pics, 0).unwrap().fill.get(1, 1)[3] > 0.99);
+}
+
+#[test]
+fn groups_sharing_a_name_stay_distinct_layers() {
+    let d = dir("dup-ids");
+    for i in 1..=3 {
+        let mut body = String::from("\n<g id=\"arm\"><rect width=\"5\" height=\"5\"/></g>\n");
+        if i != 3 {
+            body.push_str("<g id=\"arm\"><rect x=\"20\" width=\"5\" height=\"5\"/></g>\n");
+        }
+        std::fs::write(d.join(format!("f{i}.svg")), frame(&body, 40, 40)).unwrap();
+    }
+    let a = anim::load(&d, &LoadOptions::default()).unwrap();
+    let names: Vec<&str> = a.regions.iter().map(|r| r.name.as_str()).collect();
+    assert_eq!(names, ["arm (2)", "arm"]);
+    let (first, second) = (a.find_region("arm").unwrap(), a.find_region("arm (2)").unwrap());
+    let fr = a.render(first, 0).unwrap();
+    assert!(fr.fill.get(1, 1)[3] > 0.99 && fr.fill.get(21, 1)[3] == 0.0, "the first group alone");
+    let fr = a.render(second, 1).unwrap();
+    assert!(fr.fill.get(1, 1)[3] == 0.0 && fr.fill.get(21, 1)[3] > 0.99, "the second group alone");
+    assert_eq!((a.regions[first].visible.clone(), a.regions[second].visible.clone()), (0..3, 0..2));
+    let f1 = d.join("f1.svg").display().to_string();
+    assert_eq!(
+        a.regions[second].warnings,
+        [format!(
+            "layer 'arm (2)': <g id=\"arm\"> in '{f1}' line 3: an earlier top-level group in this frame is also \
+             named 'arm'; kept apart as layer 'arm (2)', not merged (groups sharing a name are told apart by their \
+             order in each frame) (also in 1 more frame)"
+        )]
+    );
+    assert!(a.regions[first].warnings.is_empty(), "{:?}", a.regions[first].warnings);
+
+    // A group itself named like a renamed one: refused, naming the frame, in one frame or
+    // across frames.
+    let d = dir("dup-clash");
+    let body = "<g id=\"arm\"/><g id=\"arm\"/><g inkscape:label=\"arm (2)\"><rect width=\"5\" height=\"5\"/></g>";
+    std::fs::write(d.join("f1.svg"), frame(body, 40, 40)).unwrap();
+    let e = anim::load(&d, &LoadOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("f1.svg") && e.contains("'arm (2)'") && e.contains("distinct ids or labels"), "{e}");
+    let d = dir("dup-clash-frames");
+    std::fs::write(
+        d.join("f1.svg"),
+        frame("<g inkscape:label=\"arm (2)\"><rect width=\"5\" height=\"5\"/></g>", 40, 40),
+    )
+    .unwrap();
+    std::fs::write(d.join("f2.svg"), frame("<g id=\"arm\"/><g id=\"arm\"/>", 40, 40)).unwrap();
+    let e = anim::load(&d, &LoadOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("f1.svg") && e.contains("f2.svg") && e.contains("'arm (2)'"), "{e}");
+}

@@ -5,11 +5,13 @@
 //! `inkscape:label` when it has one (Inkscape also gives every layer an automatic `id` such as
 //! `layer1`, so the label is the name the designer chose), else by its `id`, else
 //! `layer N` (N = its position among the top-level groups that have neither, from 1, so that
-//! named groups coming and going do not renumber it). Top-level shapes outside
-//! any group (`path`, `rect`, `circle`, `text`, `use`, …) are gathered into **one** region
-//! named `root`, drawn in document order, because a stray shape rarely deserves a layer of
-//! its own and frame-to-frame identity of unnamed shapes is not knowable. `defs`, `style`,
-//! metadata and similar are not layers.
+//! named groups coming and going do not renumber it). Groups of a frame that share a name
+//! are not merged: the second is layer `name (2)`, the third `name (3)`, in every frame (a
+//! warning says so; files where a group is itself named like that are refused). Top-level
+//! shapes outside any group (`path`, `rect`, `circle`, `text`, `use`, …) are gathered into
+//! **one** region named `root`, drawn in document order, because a stray shape rarely
+//! deserves a layer of its own and frame-to-frame identity of unnamed shapes is not knowable.
+//! `defs`, `style`, metadata and similar are not layers.
 //!
 //! **Identity across frames** is by name: a layer keeps its region wherever it appears in the
 //! sequence, and is invisible (empty) in frames that lack it. Its `visible` range runs from the
@@ -23,6 +25,12 @@
 //! !important`) into [`RegionFrame::strokes`]. (Content inside `<mask>` elements is affected
 //! by those styles too.) Text is drawn only if fonts are available to usvg, which they are not
 //! by default: a warning says so. Frame rate: 24 fps (SVG files carry none).
+//!
+//! **Warnings** (what is not drawn as written: text, filters, `<foreignObject>`, an `<image>`
+//! whose href is missing, not found, unreadable or not a decodable image, top-level elements
+//! that are not layers) name the element (`<text id="title">`, or its tag), the
+//! frame file and line where it is first seen, and how many more frames have it; those inside
+//! a layer are that [`Region`]'s warnings, the others the [`Animation`]'s (see `checks`).
 
 use super::{Animation, LoadOptions, MAX_FRAMES, MAX_SIDE, Region, RegionFrame, RegionKind, RegionRenderer};
 use crate::error::{Error, Result};
@@ -31,6 +39,8 @@ use std::collections::HashMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 use usvg::roxmltree;
+
+mod checks;
 
 const INKSCAPE_NS: &str = "http://www.inkscape.org/namespaces/inkscape";
 /// Name of the region that gathers top-level shapes outside any group.
@@ -51,6 +61,7 @@ fn is_shape(tag: &str) -> bool {
             | "image"
             | "switch"
             | "a"
+            | "svg"
     )
 }
 
@@ -58,6 +69,8 @@ fn is_shape(tag: &str) -> bool {
 #[derive(Clone, Debug)]
 struct TopLevel {
     name: String,
+    /// The element in the document it was found in.
+    node: roxmltree::NodeId,
     range: Range<usize>,
     /// Something inside sets a stroke other than `none`.
     strokes: bool,
@@ -211,32 +224,43 @@ fn check_numbers(path: &Path, doc: &roxmltree::Document) -> Result<()> {
     Ok(())
 }
 
+/// A top-level group that another group before it in the same frame is named like: it is
+/// kept as a layer of its own, named `name (k)` for the k-th such group.
+struct Renamed {
+    node: roxmltree::NodeId,
+    /// The name the groups share.
+    name: String,
+    /// The k of `name (k)`.
+    k: usize,
+}
+
 /// What [`top_level`] finds in one frame.
 struct FrameInfo {
     /// The layers, bottom first.
     layers: Vec<TopLevel>,
-    /// Whether it has `<text>` (not rendered).
-    has_text: bool,
+    /// The groups renamed because an earlier group has the same name.
+    renamed: Vec<Renamed>,
     /// Whether the root `<svg>` says its size: a `viewBox`, or both `width` and `height`.
     has_size: bool,
 }
 
 /// The layers of one frame, bottom first, and what else the loader checks in it.
 fn top_level(path: &Path, text: &str) -> Result<FrameInfo> {
-    let doc = parse_xml(path, text)?;
-    check_numbers(path, &doc)?;
+    frame_info(path, &parse_xml(path, text)?)
+}
+
+/// [`top_level`] of a parsed frame.
+fn frame_info(path: &Path, doc: &roxmltree::Document) -> Result<FrameInfo> {
+    check_numbers(path, doc)?;
     let root = doc.root_element();
     if root.tag_name().name() != "svg" {
         return Err(Error::animation(path, "the root element is not <svg>"));
     }
-    let mut out = Vec::new();
+    let mut out: Vec<TopLevel> = Vec::new();
     let mut groups = 0;
-    let mut has_text = false;
-    for node in root.descendants() {
-        if node.is_element() && node.tag_name().name() == "text" {
-            has_text = true;
-        }
-    }
+    // Per group name, how many groups have it so far; the groups renamed.
+    let mut seen: HashMap<String, usize> = HashMap::new();
+    let mut renamed = Vec::new();
     for child in root.children().filter(|c| c.is_element()) {
         let tag = child.tag_name().name();
         let name = if tag == "g" {
@@ -245,19 +269,44 @@ fn top_level(path: &Path, text: &str) -> Result<FrameInfo> {
                 .or_else(|| child.attribute("id"))
                 .map(str::to_string)
                 .filter(|s| !s.trim().is_empty());
-            named.unwrap_or_else(|| {
+            let name = named.unwrap_or_else(|| {
                 groups += 1;
                 format!("layer {groups}")
-            })
+            });
+            let k = seen.entry(name.clone()).or_insert(0);
+            *k += 1;
+            if *k > 1 {
+                renamed.push(Renamed { node: child.id(), name: name.clone(), k: *k });
+                format!("{name} ({k})")
+            } else {
+                name
+            }
         } else if is_shape(tag) {
             ROOT_LAYER.to_string()
         } else {
             continue;
         };
-        out.push(TopLevel { name, range: child.range(), strokes: sets_stroke(child) });
+        out.push(TopLevel { name, node: child.id(), range: child.range(), strokes: sets_stroke(child) });
+    }
+    // A group renamed `arm (2)` must not meet a group named so in the file.
+    for r in &renamed {
+        let unique = format!("{} ({})", r.name, r.k);
+        if let Some(other) = out.iter().find(|l| l.name == unique && l.node != r.node) {
+            let line = |id| doc.text_pos_at(doc.get_node(id).map_or(0, |n| n.range().start)).row;
+            return Err(Error::animation(
+                path,
+                format!(
+                    "top-level groups share the name '{}', so the one at line {} would be layer '{unique}', but the \
+                     group at line {} is named so already; give the groups distinct ids or labels",
+                    r.name,
+                    line(r.node),
+                    line(other.node),
+                ),
+            ));
+        }
     }
     let has_size = root.has_attribute("viewBox") || (root.has_attribute("width") && root.has_attribute("height"));
-    Ok(FrameInfo { layers: out, has_text, has_size })
+    Ok(FrameInfo { layers: out, renamed, has_size })
 }
 
 /// The document with every top-level element not named `keep` hidden.
@@ -368,8 +417,12 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
     let mut order: Vec<String> = Vec::new();
     let mut frames_of: HashMap<String, Vec<usize>> = HashMap::new();
     let mut stroked: Vec<String> = Vec::new();
-    let mut any_text = false;
-    let mut any_filter = false;
+    let mut findings = checks::Findings::default();
+    let mut images = checks::ImageCache::default();
+    // Layer names given to groups sharing a name (`arm (2)`), and names found in the files,
+    // each with the first frame that has it: no name may be both.
+    let mut made_unique: HashMap<String, PathBuf> = HashMap::new();
+    let mut named_so: HashMap<String, PathBuf> = HashMap::new();
     // The largest pattern tile of any frame (pixels at scale 1) and its frame.
     let mut tile: Option<(f64, &PathBuf)> = None;
     for (f, path) in files.iter().enumerate() {
@@ -377,9 +430,29 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
         if text.trim().is_empty() {
             return Err(Error::Empty { path: path.clone(), what: "the SVG file is empty".into() });
         }
-        let FrameInfo { layers, has_text, has_size } = top_level(path, &text)?;
-        any_text |= has_text;
-        any_filter |= text.contains("<filter");
+        let doc = parse_xml(path, &text)?;
+        let FrameInfo { layers, renamed, has_size } = frame_info(path, &doc)?;
+        let mut found = checks::frame(path, &doc, &layers, &mut images);
+        for r in &renamed {
+            let unique = format!("{} ({})", r.name, r.k);
+            made_unique.entry(unique.clone()).or_insert_with(|| path.clone());
+            if let Some(node) = doc.get_node(r.node) {
+                found.push(checks::Finding {
+                    layer: Some(unique.clone()),
+                    element: checks::describe(node),
+                    line: checks::line_of(&doc, node),
+                    what: format!(
+                        "an earlier top-level group in this frame is also named '{}'; kept apart as layer \
+                         '{unique}', not merged (groups sharing a name are told apart by their order in each frame)",
+                        r.name
+                    ),
+                });
+            }
+        }
+        for l in layers.iter().filter(|l| !renamed.iter().any(|r| r.node == l.node)) {
+            named_so.entry(l.name.clone()).or_insert_with(|| path.clone());
+        }
+        findings.add(path, found);
         let tree = usvg::Tree::from_str(&text, &opt).map_err(|e| Error::animation(path, format!("SVG: {e}")))?;
         let s = (tree.size().width(), tree.size().height());
         if !has_size {
@@ -453,6 +526,18 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
         }
     }
     let (w, h) = size.ok_or_else(|| Error::Empty { path: input.to_path_buf(), what: "no SVG frames".into() })?;
+    let mut clashes: Vec<(&String, &PathBuf)> = made_unique.iter().filter(|(n, _)| named_so.contains_key(*n)).collect();
+    clashes.sort();
+    if let Some((name, renamed_in)) = clashes.first() {
+        return Err(Error::animation(
+            &named_so[*name],
+            format!(
+                "a top-level group is named '{name}', which is also the layer name given in '{}' to a group sharing \
+                 its name with an earlier one; give the groups distinct ids or labels",
+                renamed_in.display()
+            ),
+        ));
+    }
     if order.is_empty() {
         return Err(Error::Empty {
             path: input.to_path_buf(),
@@ -473,15 +558,7 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
             });
         }
     }
-    let mut warnings = Vec::new();
-    if any_text {
-        let msg = "SVG text is not rendered (no fonts are loaded); convert text to paths".to_string();
-        warnings.push(msg);
-    }
-    if any_filter {
-        let msg = "SVG filters (blur, shadows, …) are not drawn; ignored".to_string();
-        warnings.push(msg);
-    }
+    let warnings = findings.warnings(None);
     let names: Vec<String> = order.into_iter().rev().collect();
     let frames = files.len();
     let strokes = names.iter().map(|n| stroked.contains(n)).collect();
@@ -495,8 +572,19 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
             let visible = fr[0]..fr[fr.len() - 1] + 1;
             let mut warnings = Vec::new();
             if fr.len() < visible.len() {
-                warnings.push(format!("layer '{name}' is missing in {} frames of its range", visible.len() - fr.len()));
+                let missing: Vec<usize> = visible.clone().filter(|f| fr.binary_search(f).is_err()).collect();
+                let mut list: Vec<String> =
+                    missing.iter().take(3).map(|&f| format!("'{}'", renderer.files[f].display())).collect();
+                if missing.len() > 3 {
+                    list.push(format!("{} more", missing.len() - 3));
+                }
+                let (n, s) = (missing.len(), if missing.len() == 1 { "" } else { "s" });
+                warnings.push(format!(
+                    "layer '{name}' is missing from {n} frame{s} of its range ({}); it is empty there",
+                    list.join(", ")
+                ));
             }
+            warnings.extend(findings.warnings(Some(name)));
             Region {
                 index: i + 1,
                 name: name.clone(),
