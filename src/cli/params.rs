@@ -100,7 +100,9 @@ pub struct SynthFlags {
     /// in the paper, instead of keeping the carried one), carried-estimate (the merge of the
     /// carried and the up-scaled field judges both against an estimate voted from the
     /// up-scaled field instead of the carried one), settle (the shifted field is not
-    /// settled onto its pieces: each carried match keeps the position its own warp gave it).
+    /// settled onto its pieces: each carried match keeps the position its own warp gave it),
+    /// receding-hold (receding paint runs its exemplar time backwards deep inside the shape
+    /// too, as in the paper, instead of only within the border band).
     #[arg(long, value_name = "PART", value_enum)]
     pub without: Vec<Part>,
 }
@@ -117,6 +119,7 @@ pub enum Part {
     CarriedRim,
     CarriedEstimate,
     Settle,
+    RecedingHold,
 }
 
 impl SynthFlags {
@@ -204,6 +207,7 @@ impl SynthFlags {
                 Part::CarriedRim => b.carried_rim(false),
                 Part::CarriedEstimate => b.carried_estimate(false),
                 Part::Settle => b.settle(false),
+                Part::RecedingHold => b.receding_hold(false),
             };
         }
         Ok(b.build()?)
@@ -397,7 +401,7 @@ mod tests {
         let all_on = SynthFlags { without: Vec::new(), ..flags }.params().unwrap().to_builder();
         let off = all_on.direction_rule(false).time_shift(false).segments(false).advect(false);
         let off = off.ext_normalize(false).extent_falloff(false).carried_rim(false).carried_estimate(false);
-        let off = off.settle(false).build().unwrap();
+        let off = off.settle(false).receding_hold(false).build().unwrap();
         assert_eq!(p, off);
     }
 

@@ -595,6 +595,7 @@ fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevS
         time_shift: p.parts.time_shift,
         advect: p.parts.advect,
         settle: p.parts.settle,
+        receding_hold: p.parts.receding_hold,
     };
     shift::shift_nnf(&inputs, &prev.nnf0)
 }

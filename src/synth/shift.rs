@@ -38,6 +38,9 @@ pub(crate) struct ShiftInputs<'a> {
     pub advect: bool,
     /// Settle the shifted field ([`super::ParamsBuilder::settle`], [`settle`]).
     pub settle: bool,
+    /// Hold receding paint deeper than the border band ([`super::ParamsBuilder::receding_hold`],
+    /// [`hold_receding`]).
+    pub receding_hold: bool,
 }
 
 /// Pixels of motion that one frame of deviation from the nominal step costs in the paper's
@@ -99,6 +102,17 @@ fn time_step(src: &SourceLevel, m: &Match, dt: f32, c: f32) -> Option<(usize, f3
     let speed = |k: usize| src.info[k * src.frame_len + pix].speed;
     let path = if best_i >= i { (i..best_i).map(speed).sum() } else { (best_i..i).map(speed).sum() };
     Some((best_i, path))
+}
+
+/// Whether the carried match `m` at target pixel `q` keeps its exemplar frame (Δi = 0) instead of
+/// taking its time step ([`super::ParamsBuilder::receding_hold`]): a receding match
+/// ([`Match::flip`]: the target moves against the exemplar's flow) deeper inside the target
+/// than the border width b. The paper runs the exemplar's time backwards there, which at the
+/// edge lets the rim retreat the way the bloom spread, but deeper inside only turns the
+/// still interior back towards the bloom's first, wet frames (un-spreading it) and makes it
+/// boil; held, its motion is all carried by the advection.
+fn hold_receding(inp: &ShiftInputs, m: &Match, q: usize) -> bool {
+    inp.receding_hold && inp.advect && m.flip && inp.dist_cur[q] > inp.band
 }
 
 /// Whether a shape moves rather than grows from the previous mask to the current one (both
@@ -249,6 +263,7 @@ pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
             *o = *m;
             return;
         };
+        let (best_i, supplied) = if hold_receding(inp, m, q) { (m.i as usize, 0.0) } else { (best_i, supplied) };
         if !inp.advect {
             *o = Match { i: best_i as u16, err: f32::INFINITY, ..*m };
             return;
