@@ -230,8 +230,8 @@ struct Renamed {
     node: roxmltree::NodeId,
     /// The name the groups share.
     name: String,
-    /// The k of `name (k)`.
-    k: usize,
+    /// The layer name it is given, `name (k)` for the k-th such group.
+    unique: String,
 }
 
 /// What [`top_level`] finds in one frame.
@@ -276,8 +276,9 @@ fn frame_info(path: &Path, doc: &roxmltree::Document) -> Result<FrameInfo> {
             let k = seen.entry(name.clone()).or_insert(0);
             *k += 1;
             if *k > 1 {
-                renamed.push(Renamed { node: child.id(), name: name.clone(), k: *k });
-                format!("{name} ({k})")
+                let unique = format!("{name} ({k})");
+                renamed.push(Renamed { node: child.id(), name, unique: unique.clone() });
+                unique
             } else {
                 name
             }
@@ -290,8 +291,8 @@ fn frame_info(path: &Path, doc: &roxmltree::Document) -> Result<FrameInfo> {
     }
     // A group renamed `arm (2)` must not meet a group named so in the file.
     for r in &renamed {
-        let unique = format!("{} ({})", r.name, r.k);
-        if let Some(other) = out.iter().find(|l| l.name == unique && l.node != r.node) {
+        let unique = &r.unique;
+        if let Some(other) = out.iter().find(|l| l.name == *unique && l.node != r.node) {
             let line = |id| doc.text_pos_at(doc.get_node(id).map_or(0, |n| n.range().start)).row;
             return Err(Error::animation(
                 path,
@@ -434,7 +435,7 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
         let FrameInfo { layers, renamed, has_size } = frame_info(path, &doc)?;
         let mut found = checks::frame(path, &doc, &layers, &mut images);
         for r in &renamed {
-            let unique = format!("{} ({})", r.name, r.k);
+            let unique = &r.unique;
             made_unique.entry(unique.clone()).or_insert_with(|| path.clone());
             if let Some(node) = doc.get_node(r.node) {
                 found.push(checks::Finding {
@@ -453,7 +454,8 @@ pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
             named_so.entry(l.name.clone()).or_insert_with(|| path.clone());
         }
         findings.add(path, found);
-        let tree = usvg::Tree::from_str(&text, &opt).map_err(|e| Error::animation(path, format!("SVG: {e}")))?;
+        // The document parsed above, with the options usvg parses text with.
+        let tree = usvg::Tree::from_xmltree(&doc, &opt).map_err(|e| Error::animation(path, format!("SVG: {e}")))?;
         let s = (tree.size().width(), tree.size().height());
         if !has_size {
             return Err(Error::animation(

@@ -259,11 +259,17 @@ pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
             return;
         }
         let dt = inp.ext_cur[q] - inp.ext_prev[q];
-        let Some((best_i, supplied)) = time_step(src, m, dt, c) else {
+        // A held match keeps its frame and supplies no motion; like a time step, it needs its
+        // center inside the exemplar.
+        let step = if hold_receding(inp, m, q) {
+            src.info_at(m.i as usize, m.x, m.y).map(|_| (m.i as usize, 0.0))
+        } else {
+            time_step(src, m, dt, c)
+        };
+        let Some((best_i, supplied)) = step else {
             *o = *m;
             return;
         };
-        let (best_i, supplied) = if hold_receding(inp, m, q) { (m.i as usize, 0.0) } else { (best_i, supplied) };
         if !inp.advect {
             *o = Match { i: best_i as u16, err: f32::INFINITY, ..*m };
             return;
