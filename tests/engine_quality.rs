@@ -244,9 +244,15 @@ fn paint_moves_with_the_target() {
 #[test]
 fn boundary_term_carries_the_rim() {
     // On moving targets (on a still one the extents already pick rim paint for the border).
+    // Measured (edge darkening, growing and sliding): 0.066 and 0.035 with the term, 0.066 and
+    // 0.016 without. (Before the contrast balance the floor was on the sum, +0.02; the balance
+    // keeps rim paint on the growing ellipse without the term too, so the sum gains 0.018.) The
+    // sliding ellipse, whose rim the term must carry along, keeps at least 0.01 more (+0.019),
+    // and the growing one loses nothing with it.
     let (_, g, l) = row("full");
     let (_, g0, l0) = row("no boundary");
-    assert!(g.rim + l.rim > g0.rim + l0.rim + 0.02, "rim with {:?} without {:?}", (g.rim, l.rim), (g0.rim, l0.rim));
+    let what = format!("rim with {:?} without {:?}", (g.rim, l.rim), (g0.rim, l0.rim));
+    assert!(l.rim > l0.rim + 0.01 && g.rim >= g0.rim - 0.005, "{what}");
 }
 
 #[test]

@@ -67,7 +67,10 @@ fn check(what: &str, value: Option<f32>, floor: f32, higher: bool, failures: &mu
 /// 0.61–0.67 (after the flow window and the paint carried into newly covered pixels: contrast
 /// 0.87–1.03, ink-rims translating 1.01 → 1.03, the rest within 0.01; after receding paint
 /// was held deeper than the border band, today's default: contrast 0.88–0.98, edge darkening
-/// 0.80–1.07, palette 0.013–0.030, incoherent change 0.52–0.79, motion 0.61–0.66). With the merge's
+/// 0.80–1.07, palette 0.013–0.030, incoherent change 0.52–0.79, motion 0.61–0.66; after the
+/// contrast balance and the temporal guide voted from each pixel's own match, today's default:
+/// IoU α 0.996–0.997, contrast 0.88–1.01, edge darkening 0.75–1.08, palette 0.012–0.029,
+/// incoherent change 0.51–0.80, motion 0.62–0.67). With the merge's
 /// estimate voted from the up-scaled field (`--without
 /// carried-estimate`, the previous default): contrast 0.85–0.96, edge darkening 0.77–1.06,
 /// palette 0.011–0.034, incoherent change 0.57–0.82. Before the field was settled and the
@@ -88,7 +91,8 @@ fn check(what: &str, value: Option<f32>, floor: f32, higher: bool, failures: &mu
 ///
 /// The issue's floors are reached for coverage, incoherent change (≤ 1.2), motion agreement
 /// (≥ 0.6), the contrast of all four runs (≥ 0.85), the palette of all four (≤ 0.03: ink-rims
-/// growing 0.0296) and the rim of three; blue-bloom growing's rim is at 0.798 (0.8). The floors below are the measured values less a margin (~0.04–0.08; the
+/// growing 0.0296) and the rim of three; blue-bloom growing's rim is at 0.798 (0.8; 0.746 with
+/// the contrast balance, 0.026 above its floor). The floors below are the measured values less a margin (~0.04–0.08; the
 /// spread between seeds and targets is ~0.05; set before the carried estimate, which raised
 /// the measured values): contrast 0.78 against 0.87, edge darkening 0.72 against 0.79, palette
 /// 0.042 against 0.035, incoherent change 0.88 against 0.83, motion 0.55 against 0.61.
@@ -130,7 +134,10 @@ fn moving_targets_keep_the_rim_texture_and_coherence() {
 /// run contrast 0.77 and 0.72, edge darkening 1.34 and 1.15. The issue's floor (0.9 in every
 /// window) is reached but for blue-bloom's rim. With receding paint held deeper than the
 /// border band (today's default): ink-rims 0.98 and 1.02, blue-bloom 0.93 and 0.85; whole run
-/// contrast 0.77 and 0.72, edge darkening 1.36 and 1.20. Before the carried estimate: ink-rims
+/// contrast 0.77 and 0.72, edge darkening 1.36 and 1.20. With the contrast balance and the
+/// temporal guide voted from each pixel's own match (today's default): ink-rims 0.93 and 0.99,
+/// blue-bloom 0.95 and 0.82; whole run contrast 0.80 and 0.79, edge darkening 1.31 and 1.24
+/// (ink-rims' contrast is then 0.02 above its floor). Before the carried estimate: ink-rims
 /// 1.00/1.00, blue-bloom 0.92/0.83. Before the field was settled: ink-rims 0.98/1.00, blue-bloom 0.90/0.87. Before the carried rim
 /// was kept the minima were ink-rims 0.80/0.98 and blue-bloom 0.74/0.74. Before the extent
 /// falloff the minima were ink-rims 0.83/0.99 and blue-bloom 0.76/0.70 (the falloff raises
@@ -183,10 +190,15 @@ fn long_target_keeps_its_paint_in_every_window() {
 /// (today's default): rim 1.00 against 0.25, contrast 0.81 against 0.70 and 0.72, whole run
 /// 0.66 against 0.60. (Before the carried estimate: rim 1.00 against 0.37,
 /// contrast 0.82 against 0.70 and 0.74, whole run 0.65 against 0.59 — the carried estimate
-/// holds part of what the settling held.) Floors: the rim stays at ≥ 0.85 of the first
-/// window's in every window and at least 0.3 above the run without the carried rim; the
-/// lowest window's contrast is at least 0.04 above the run without the carried rim (measured
-/// +0.06), and the whole run's at least 0.02 above the run without settling (measured +0.03).
+/// holds part of what the settling held.) With the contrast balance and the temporal guide
+/// voted from each pixel's own match (today's default): rim 1.00 against 0.79 without the
+/// carried rim (the balance keeps the paint behind the rim from paling, so the merge's
+/// replacements cost the rim less), contrast 0.89 against 0.76 and 0.69, whole run 0.70
+/// against 0.59. Floors: the rim stays at ≥ 0.85 of the first window's in every window and at
+/// least 0.15 above the run without the carried rim (measured +0.21; +0.75 before the
+/// balance, when this floor was 0.3); the lowest window's contrast is at least 0.04 above the
+/// run without the carried rim (measured +0.13), and the whole run's at least 0.02 above the
+/// run without settling (measured +0.11).
 #[test]
 fn carried_rim_and_settled_field_keep_the_paint_of_a_long_target() {
     let run = |params: Params| {
@@ -213,7 +225,8 @@ fn carried_rim_and_settled_field_keep_the_paint_of_a_long_target() {
          {contrast:.2}, {contrast_merged:.2} without the carried rim, {contrast_unsettled:.2} without \
          settling; whole run's contrast {whole:.2}, {whole_unsettled:.2} without settling"
     );
-    assert!(rim >= 0.85 && rim >= rim_merged + 0.3, "{what}");
+    println!("{what}");
+    assert!(rim >= 0.85 && rim >= rim_merged + 0.15, "{what}");
     assert!(contrast >= contrast_merged + 0.04, "{what}");
     assert!(whole >= whole_unsettled + 0.02, "{what}");
 }
@@ -227,9 +240,13 @@ fn carried_rim_and_settled_field_keep_the_paint_of_a_long_target() {
 /// Measured (`quality -e green-wash -e yellow-granules --target still --frames 12`, with and
 /// without `--without extent-falloff`): contrast green-wash 0.808 against 0.694,
 /// yellow-granules 0.936 against 0.792; palette 0.025 against 0.030 and 0.024 against 0.035
-/// (blue-bloom, whose core is not calm, 0.858 against 0.846). Floors: the falloff raises the
-/// contrast by at least 0.07 (measured +0.11 and +0.14) to at least 0.75 (0.81), and does not
-/// move the palette away from the exemplar's by more than 0.005.
+/// (blue-bloom, whose core is not calm, 0.858 against 0.846). With the contrast balance
+/// (`Params::contrast_balance`), which also keeps the search off the exemplar's flattest paint,
+/// and the temporal guide voted from each pixel's own match (today's default): green-wash 0.852
+/// against 0.791, yellow-granules 0.969 against 0.857; palette 0.023 against 0.024 and 0.025
+/// against 0.030. Floors: the falloff raises the contrast by at least 0.04 (measured +0.061
+/// and +0.112; +0.11 and +0.14 before the balance, when this floor was 0.07) to at least 0.8
+/// (0.852), and does not move the palette away from the exemplar's by more than 0.005.
 #[test]
 fn extent_falloff_gives_still_interiors_the_exemplar_texture() {
     let run = |falloff: bool| {
@@ -248,7 +265,7 @@ fn extent_falloff_gives_still_interiors_the_exemplar_texture() {
         let (ca, cb) = (a.summary.contrast_ratio.unwrap(), b.summary.contrast_ratio.unwrap());
         let (pa, pb) = (a.summary.palette_distance_mean.unwrap(), b.summary.palette_distance_mean.unwrap());
         let name = &a.exemplar;
-        if ca < cb + 0.07 || ca < 0.75 {
+        if ca < cb + 0.04 || ca < 0.8 {
             failures.push(format!("{name}: contrast {ca:.3} with the falloff, {cb:.3} without"));
         }
         if pa > pb + 0.005 {
@@ -264,11 +281,15 @@ fn extent_falloff_gives_still_interiors_the_exemplar_texture() {
 ///
 /// Measured (`quality -e green-wash --target identity`, and with `--flow-weight 0`): worst
 /// frame 34.2 dB with the extent term, 17.2 dB (frame 1) without; median 39.7 against 33.6
-/// (before the supplied motion was the flow's path: 28.1 against 17.2). Floor: the term gains
-/// at least 6 dB on the worst frame (measured 17.0).
+/// (before the supplied motion was the flow's path: 28.1 against 17.2). With the contrast
+/// balance (`Params::contrast_balance`) the run without the term no longer takes the later
+/// frames' flat interiors for the first frame's drops, and the term's gain is smaller: worst
+/// frame 33.9 dB against 32.6 (frame 11), median 39.7 against 37.6. Floors: the term gains
+/// at least 0.6 dB on the worst frame (measured 1.3; 17.0 before the balance, when this floor
+/// was 6) and 1 dB on the median (measured 2.1).
 #[test]
 fn extent_term_tells_the_paint_s_age_on_the_identity() {
-    let worst = |w_ext: f32| {
+    let psnr = |w_ext: f32| {
         let report = suite(
             SuiteOptions::default()
                 .exemplars(["green-wash"])
@@ -276,8 +297,14 @@ fn extent_term_tells_the_paint_s_age_on_the_identity() {
                 .identity(true)
                 .params(Params::builder().w_ext(w_ext).build().unwrap()),
         );
-        report.rows[0].identity.as_ref().expect("identity row").psnr_min
+        let id = report.rows[0].identity.as_ref().expect("identity row");
+        (id.psnr_min, id.psnr_median)
     };
-    let (with, without) = (worst(Params::default().w_ext()), worst(0.0));
-    assert!(with >= without + 6.0, "worst frame {with:.1} dB with the extent term, {without:.1} dB without");
+    let ((with, with_median), (without, without_median)) = (psnr(Params::default().w_ext()), psnr(0.0));
+    let what = format!(
+        "worst frame {with:.1} dB with the extent term, {without:.1} dB without; median {with_median:.1} and \
+         {without_median:.1} dB"
+    );
+    println!("{what}");
+    assert!(with >= without + 0.6 && with_median >= without_median + 1.0, "{what}");
 }

@@ -31,6 +31,10 @@ pub struct SynthFlags {
     /// Uniformity weight λ [default: 4].
     #[arg(long, value_name = "L")]
     pub lambda: Option<f32>,
+    /// Contrast balance μ: exemplar paint of a contrast that the output uses more than the
+    /// exemplar holds it costs μ·λ more per patch; 0 = off, as in the paper [default: 4].
+    #[arg(long, value_name = "MU")]
+    pub contrast_balance: Option<f32>,
     /// Coherence factor κ: a random PatchMatch candidate must be κ times better than the
     /// current match (1 = plain PatchMatch, the paper; 2 keeps more texture) [default: 2].
     #[arg(long, value_name = "K")]
@@ -73,9 +77,13 @@ pub struct SynthFlags {
     #[arg(long, value_name = "PX")]
     pub vote_sigma: Option<f32>,
     /// σ of the center weighting of the estimates the search matches against (EM estimate,
-    /// temporal guide), pixels; ≤ 0.35 = each pixel's own match, 0 = uniform [default: 0.5].
+    /// the merge's estimate), pixels; ≤ 0.35 = each pixel's own match, 0 = uniform [default: 0.5].
     #[arg(long, value_name = "PX")]
     pub estimate_sigma: Option<f32>,
+    /// σ of the center weighting of the temporal guide voted from the previous frame's
+    /// field, pixels; ≤ 0.35 = each pixel's own match, 0 = uniform [default: 0.3].
+    #[arg(long, value_name = "PX")]
+    pub prev_sigma: Option<f32>,
     /// Also optimize the finest pyramid level (slower; the thesis only votes it).
     #[arg(long)]
     pub optimize_finest: bool,
@@ -102,7 +110,9 @@ pub struct SynthFlags {
     /// up-scaled field instead of the carried one), settle (the shifted field is not
     /// settled onto its pieces: each carried match keeps the position its own warp gave it),
     /// receding-hold (receding paint runs its exemplar time backwards deep inside the shape
-    /// too, as in the paper, instead of only within the border band).
+    /// too, as in the paper, instead of only within the border band), contrast-balance (the
+    /// occurrence penalty spreads the use over the exemplar's positions only, as in the paper,
+    /// and the search drifts to the exemplar's flattest paint; same as --contrast-balance 0).
     #[arg(long, value_name = "PART", value_enum)]
     pub without: Vec<Part>,
 }
@@ -120,6 +130,7 @@ pub enum Part {
     CarriedEstimate,
     Settle,
     RecedingHold,
+    ContrastBalance,
 }
 
 impl SynthFlags {
@@ -158,6 +169,12 @@ impl SynthFlags {
         }
         if let Some(v) = self.lambda {
             b = b.lambda(v);
+        }
+        if let Some(v) = self.contrast_balance {
+            b = b.contrast_balance(v);
+        }
+        if let Some(v) = self.prev_sigma {
+            b = b.prev_sigma(v);
         }
         if let Some(v) = self.coherence {
             b = b.coherence(v);
@@ -208,6 +225,7 @@ impl SynthFlags {
                 Part::CarriedEstimate => b.carried_estimate(false),
                 Part::Settle => b.settle(false),
                 Part::RecedingHold => b.receding_hold(false),
+                Part::ContrastBalance => b.contrast_balance(0.0),
             };
         }
         Ok(b.build()?)
@@ -229,6 +247,7 @@ impl SynthFlags {
         push("flow-weight", self.flow_weight.map(|v| v.to_string()));
         push("prev-weight", self.prev_weight.map(|v| v.to_string()));
         push("lambda", self.lambda.map(|v| v.to_string()));
+        push("contrast-balance", self.contrast_balance.map(|v| v.to_string()));
         push("coherence", self.coherence.map(|v| v.to_string()));
         push("occ-radius", self.occ_radius.map(|v| v.to_string()));
         push("border-width", self.border_width.map(|v| v.to_string()));
@@ -243,6 +262,7 @@ impl SynthFlags {
         push("prev-modulation-bounds", self.prev_modulation_bounds.clone());
         push("vote-sigma", self.vote_sigma.map(|v| v.to_string()));
         push("estimate-sigma", self.estimate_sigma.map(|v| v.to_string()));
+        push("prev-sigma", self.prev_sigma.map(|v| v.to_string()));
         if self.optimize_finest {
             out.push("--optimize-finest".into());
         }
@@ -387,6 +407,8 @@ mod tests {
             prev_modulation_bounds: Some("10,2".into()),
             vote_sigma: Some(0.0),
             estimate_sigma: Some(0.5),
+            prev_sigma: Some(0.25),
+            contrast_balance: Some(2.5),
             optimize_finest: true,
             keep_grain: true,
             without: <Part as clap::ValueEnum>::value_variants().to_vec(),
@@ -401,7 +423,7 @@ mod tests {
         let all_on = SynthFlags { without: Vec::new(), ..flags }.params().unwrap().to_builder();
         let off = all_on.direction_rule(false).time_shift(false).segments(false).advect(false);
         let off = off.ext_normalize(false).extent_falloff(false).carried_rim(false).carried_estimate(false);
-        let off = off.settle(false).receding_hold(false).build().unwrap();
+        let off = off.settle(false).receding_hold(false).contrast_balance(0.0).build().unwrap();
         assert_eq!(p, off);
     }
 

@@ -13,7 +13,7 @@
 use super::nnf::Nnf;
 use super::params::PATCH;
 use super::patch::{Center, OFFS, tap_offsets};
-use super::source::{FLAG_LANE, Feat, IN_MASK, INTERIOR, OMEGA_LANE, SourceLevel};
+use super::source::{CONTRAST_BINS, FLAG_LANE, Feat, IN_MASK, INTERIOR, NO_BIN, OMEGA_LANE, SourceLevel};
 use super::target::TargetLevel;
 use rayon::prelude::*;
 
@@ -201,16 +201,46 @@ pub(crate) struct Occurrence {
     feat: Vec<Feat>,
     /// Zeroed marker arrays, one per part of the target.
     marks: Vec<Vec<i32>>,
+    /// The level's contrast bins ([`SourceLevel::contrast`]), in the same columns as `feat`.
+    bins: Vec<u8>,
+}
+
+/// The contrast balance of the field `nnf` (μ = `balance`): per segment and contrast bin of
+/// the exemplar ([`SourceLevel::contrast`]), `μ·max(0, B·u_b − 1)/OMEGA_CAP` — `u_b` the share
+/// of the segment's matched in-mask pixels whose center lies in bin b, B the bins, each of
+/// which holds 1/B of the exemplar's centers — in the units of `Ω*·k` of the occurrence lane.
+/// Every voxel of a bin the field uses more than the exemplar holds pays it, whether or not
+/// that voxel is used.
+fn contrast_excess(src: &SourceLevel, nnf: &Nnf, tgt: &TargetLevel, balance: f32) -> [[f32; CONTRAST_BINS]; 2] {
+    let mut count = [[0usize; CONTRAST_BINS]; 2];
+    if balance > 0.0 && !src.contrast.is_empty() {
+        for (q, m) in nnf.data.iter().enumerate() {
+            if !m.ok || tgt.info[q].flags & IN_MASK == 0 {
+                continue;
+            }
+            if let Some(idx) = src.nearest(m.i as usize, m.x, m.y)
+                && src.contrast[idx] != NO_BIN
+            {
+                let seg = (src.feat[idx][FLAG_LANE] & INTERIOR != 0) as usize;
+                count[seg][src.contrast[idx] as usize] += 1;
+            }
+        }
+    }
+    count.map(|c| {
+        let total = c.iter().sum::<usize>().max(1) as f32;
+        c.map(|n| balance * (CONTRAST_BINS as f32 * n as f32 / total - 1.0).max(0.0) / OMEGA_CAP)
+    })
 }
 
 impl Occurrence {
     /// Buffers for one level (allocated at the first update).
     pub fn new() -> Occurrence {
-        Occurrence { feat: Vec::new(), marks: Vec::new() }
+        Occurrence { feat: Vec::new(), marks: Vec::new(), bins: Vec::new() }
     }
 
-    /// Recomputes the penalty of level `src` for the field `nnf` (r = `r`, λ = `lambda`);
-    /// returns the features with the occurrence lane and `w_Ω`, `None` when λ = 0.
+    /// Recomputes the penalty of level `src` for the field `nnf` (r = `r`, λ = `lambda`, the
+    /// contrast balance μ = `balance`, [`contrast_excess`]); returns the features with the
+    /// occurrence lane and `w_Ω`, `None` when λ = 0.
     pub fn update(
         &mut self,
         src: &SourceLevel,
@@ -218,6 +248,7 @@ impl Occurrence {
         tgt: &TargetLevel,
         r: usize,
         lambda: f32,
+        balance: f32,
     ) -> Option<(&[Feat], f32)> {
         if lambda == 0.0 {
             return None;
@@ -225,7 +256,9 @@ impl Occurrence {
         let len = src.feat.len();
         if self.feat.len() != len {
             self.feat = src.feat.clone();
+            self.bins = if src.contrast.len() == len { src.contrast.clone() } else { vec![NO_BIN; len] };
         }
+        let excess = contrast_excess(src, nnf, tgt, balance);
         if self.marks.len() != parts() || self.marks.iter().any(|m| m.len() != len) {
             self.marks = vec![vec![0i32; len]; parts()];
         }
@@ -240,17 +273,15 @@ impl Occurrence {
         let fl = src.frame_len;
         let per = fl.div_ceil(64).max(1);
         let feat = columns(std::iter::once(&mut self.feat[..]), fl, per);
+        let bins = columns(std::iter::once(&mut self.bins[..]), fl, per);
         let marks = columns(self.marks.iter_mut().map(|m| &mut m[..]), fl, per);
-        feat.into_par_iter().zip(marks).for_each(|(mut feat, mut parts)| {
-            let feat = &mut feat[0];
+        feat.into_par_iter().zip(bins).zip(marks).for_each(|((mut feat, bins), mut parts)| {
+            let (feat, bins) = (&mut feat[0], &bins[0]);
             box_sum(&mut parts, r, |i, run| {
-                for (f, &c) in feat[i].iter_mut().zip(run) {
-                    f[OMEGA_LANE] = if c <= 0 {
-                        0
-                    } else {
-                        let seg = (f[FLAG_LANE] & INTERIOR != 0) as usize;
-                        ((255.0 * (c as f32 * k[i][seg]).sqrt() + 0.5) as u32).min(255) as u8
-                    };
+                for ((f, &b), &c) in feat[i].iter_mut().zip(bins[i].iter()).zip(run) {
+                    let seg = (f[FLAG_LANE] & INTERIOR != 0) as usize;
+                    let v = c.max(0) as f32 * k[i][seg] + if b == NO_BIN { 0.0 } else { excess[seg][b as usize] };
+                    f[OMEGA_LANE] = if v <= 0.0 { 0 } else { ((255.0 * v.sqrt() + 0.5) as u32).min(255) as u8 };
                 }
             });
         });
@@ -328,7 +359,7 @@ mod tests {
             let want = brute_counts(src, nnf, &tgt, r);
             assert!(want.iter().filter(|&&c| c > 0).count() > 500);
             assert_eq!(counts(src, nnf, &tgt, r), want);
-            let (feat, w) = occ.update(src, nnf, &tgt, r, lambda).unwrap();
+            let (feat, w) = occ.update(src, nnf, &tgt, r, lambda, 0.0).unwrap();
             let n2 = (PATCH * PATCH) as f32;
             assert!((w - OMEGA_CAP * lambda / n2 / (255.0 * 255.0)).abs() < 1e-12);
             let mut nonzero = 0;
@@ -347,6 +378,76 @@ mod tests {
             }
             assert_eq!(nonzero, want.iter().filter(|&&c| c > 0).count());
         }
-        assert!(occ.update(src, &fields[0], &tgt, 2, 0.0).is_none());
+        assert!(occ.update(src, &fields[0], &tgt, 2, 0.0, 0.0).is_none());
+    }
+
+    /// The contrast balance: a field that takes only the exemplar's flattest paint makes every
+    /// voxel of that bin pay `μ·λ·(B − 1)` per patch, used or not, and leaves the other bins'
+    /// unused voxels free; a field spread like the exemplar pays (almost) nothing for it.
+    #[test]
+    fn contrast_balance_charges_the_overused_bin() {
+        let params = Params::builder().build().unwrap();
+        let (rgb, g) = disc_exemplar(48, 40, 9, 2);
+        let pyr = SourcePyramid::build(&rgb, &g, &params, 4.0, 1);
+        let src = &pyr.levels[0];
+        // Every frame's in-mask centers of a segment are split into equal shares.
+        for i in 0..src.frames {
+            for seg in 0..2 {
+                let mut per_bin = [0usize; CONTRAST_BINS];
+                for &idx in &src.valid[seg] {
+                    let (idx, f) = (idx as usize, src.feat[idx as usize]);
+                    if idx / src.frame_len == i && f[FLAG_LANE] & IN_MASK != 0 {
+                        per_bin[src.contrast[idx] as usize] += 1;
+                    }
+                }
+                let n: usize = per_bin.iter().sum();
+                if n >= 8 * CONTRAST_BINS {
+                    assert!(
+                        per_bin.iter().all(|&c| c * CONTRAST_BINS * 2 >= n),
+                        "frame {i}, segment {seg}: {per_bin:?}"
+                    );
+                }
+            }
+        }
+        let tg = disc_guides(36, 30, glam::Vec2::new(18.0, 15.0), 11.0, 0.5, 2, 5);
+        let tgt = TargetLevel::new(&tg, &pyr.quant, 4.0, None, src.ext_falloff, [1.0; 3]);
+        let (lambda, mu) = (0.7, 2.0);
+        let n2 = (PATCH * PATCH) as f32;
+        // Every matched pixel moved onto one flattest-bin center of its own segment.
+        let mut flat = random_field(src, &tgt, 0);
+        for (q, m) in flat.data.iter_mut().enumerate() {
+            if !m.ok {
+                continue;
+            }
+            let seg = (tgt.info[q].flags & INTERIOR != 0) as usize;
+            let idx = *src.valid[seg].iter().find(|&&idx| src.contrast[idx as usize] == 0).unwrap() as usize;
+            let (i, x, y) = src.coords(idx);
+            (m.i, m.x, m.y) = (i as u16, x as f32, y as f32);
+        }
+        let used = counts(src, &flat, &tgt, 2);
+        let mut occ = Occurrence::new();
+        let (feat, w) = occ.update(src, &flat, &tgt, 2, lambda, mu).unwrap();
+        let full = (CONTRAST_BINS - 1) as f32 * mu * lambda / n2;
+        let (mut charged, mut free) = (0, 0);
+        for (k, f) in feat.iter().enumerate() {
+            let stored = w * (f[OMEGA_LANE] as f32).powi(2);
+            if used[k] > 0 || src.contrast[k] == NO_BIN {
+                continue;
+            }
+            if src.contrast[k] == 0 {
+                assert!(
+                    (stored - full).abs() <= w * (2.0 * f[OMEGA_LANE] as f32 + 1.0),
+                    "voxel {k}: {stored} vs {full}"
+                );
+                charged += 1;
+            } else {
+                assert_eq!(f[OMEGA_LANE], 0, "voxel {k} of bin {}", src.contrast[k]);
+                free += 1;
+            }
+        }
+        assert!(charged > 50 && free > 300, "{charged} charged, {free} free");
+        // Without the balance the unused voxels are free.
+        let (feat, _) = occ.update(src, &flat, &tgt, 2, lambda, 0.0).unwrap();
+        assert!(feat.iter().zip(&used).all(|(f, &c)| c > 0 || f[OMEGA_LANE] == 0));
     }
 }

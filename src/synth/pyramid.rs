@@ -165,7 +165,7 @@ fn temporal_guide(f: &FrameInputs, l: usize, tgt: &mut TargetLevel, st: &mut Sta
     let sl = &src.levels[l];
     let (lw, lh) = f.pyr[l].mask.size();
     let sd = timed(&mut st.shift, || shifted.downscale(l, lw, lh));
-    let voted = timed(&mut st.vote, || vote::vote(sl, &sd, src.paper, p.schedule.estimate_sigma));
+    let voted = timed(&mut st.vote, || vote::vote(sl, &sd, src.paper, p.schedule.prev_sigma));
     write_lanes(tgt, &voted, false);
     timed(&mut st.shift, || {
         shift::fill_modulation(tgt, sl, &sd, &prev_masks[l], src.border_width, p.schedule.prev_bounds, p.weights.w_prev)
@@ -215,7 +215,9 @@ fn initial_field(
         let omega = if lv.finest_vote_only {
             None
         } else {
-            timed(&mut st.occurrence, || occ.update(sl, &up, tgt, p.schedule.occ_radius, p.weights.lambda))
+            timed(&mut st.occurrence, || {
+                occ.update(sl, &up, tgt, p.schedule.occ_radius, p.weights.lambda, p.weights.contrast_balance)
+            })
         };
         let ctx = Ctx::new(sl, tgt, omega, p.weights.w_color, p, lv.keys(0));
         let kappa = if lv.finest_vote_only { p.weights.coherence } else { 1.0 };
@@ -253,8 +255,9 @@ fn optimize(
     write_lanes(tgt, &voted, true);
     for opt in 0..p.opt_iters_at(lv.from_coarsest) {
         for it in 0..p.pm_iters_at(lv.from_coarsest) {
-            let omega =
-                timed(&mut st.occurrence, || occ.update(sl, field, tgt, p.schedule.occ_radius, p.weights.lambda));
+            let omega = timed(&mut st.occurrence, || {
+                occ.update(sl, field, tgt, p.schedule.occ_radius, p.weights.lambda, p.weights.contrast_balance)
+            });
             let ctx = Ctx::new(sl, tgt, omega, p.weights.w_color, p, lv.keys(opt as u64));
             let (stats, e) = timed(&mut st.patchmatch, || patchmatch::sweep(&ctx, field, it));
             out.energy.push((l, e));

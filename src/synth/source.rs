@@ -241,6 +241,12 @@ pub(crate) struct SourceLevel {
     /// colors within their own segment (paint or paper), 0..=255, and in lane 3 the local
     /// standard deviation of the grain (color − low-pass), in units of 1/1020.
     pub grain: Vec<[u8; 4]>,
+    /// The contrast bin of every valid center ([`NO_BIN`] elsewhere), same padded layout: the
+    /// standard deviation of the luma over its n × n window, as a quantile of the in-mask valid
+    /// centers of its segment and frame (bin b holds the b-th of [`CONTRAST_BINS`] equal shares),
+    /// for the contrast balance of the occurrence penalty
+    /// ([`super::occurrence::Occurrence::update`]).
+    pub contrast: Vec<u8>,
     /// Whether the extent lanes of this level fade out in the interior
     /// ([`ParamsBuilder::extent_falloff`](super::ParamsBuilder::extent_falloff) and
     /// [`EXTENT_FALLOFF_MIN_SIDE`]); the target's level does the same.
@@ -660,7 +666,62 @@ fn build_level(
         seg_count,
         lane_w,
         grain: Vec::new(),
+        contrast: Vec::new(),
         ext_falloff: falloff,
+    }
+    .with_contrast()
+}
+
+/// Bins of [`SourceLevel::contrast`].
+pub(crate) const CONTRAST_BINS: usize = 8;
+/// [`SourceLevel::contrast`] of a voxel that is not a valid center.
+pub(crate) const NO_BIN: u8 = u8::MAX;
+
+impl SourceLevel {
+    /// Fills [`SourceLevel::contrast`]: each valid center's luma deviation over its unrotated
+    /// n × n window, binned by the quantiles of the in-mask valid centers of its segment and
+    /// frame.
+    fn with_contrast(mut self) -> SourceLevel {
+        let mut bins = vec![NO_BIN; self.feat.len()];
+        let (stride, feat) = (self.stride as isize, &self.feat);
+        let deviation = |idx: u32| -> f32 {
+            let (mut s, mut s2) = (0.0f32, 0.0f32);
+            for dy in -(HALF as isize)..=HALF as isize {
+                for dx in -(HALF as isize)..=HALF as isize {
+                    let f = feat[(idx as isize + dy * stride + dx) as usize];
+                    let l = (f[0] as f32 + f[1] as f32 + f[2] as f32) / 3.0;
+                    s += l;
+                    s2 += l * l;
+                }
+            }
+            let n = ((2 * HALF + 1) * (2 * HALF + 1)) as f32;
+            (s2 / n - (s / n).powi(2)).max(0.0).sqrt()
+        };
+        let frame_len = self.frame_len;
+        for list in &self.valid {
+            let devs: Vec<f32> = list.par_iter().map(|&idx| deviation(idx)).collect();
+            // Quantiles per frame: the valid lists are in frame order.
+            let mut start = 0;
+            while start < list.len() {
+                let frame = list[start] as usize / frame_len;
+                let end = start + list[start..].partition_point(|&idx| idx as usize / frame_len == frame);
+                // The shares are of the centers in the mask: those are the ones in-mask pixels
+                // of the target take, and the use is counted over them.
+                let in_mask = |k: &usize| self.feat[list[*k] as usize][FLAG_LANE] & IN_MASK != 0;
+                let mut sorted: Vec<f32> = (start..end).filter(in_mask).map(|k| devs[k]).collect();
+                if sorted.is_empty() {
+                    sorted = devs[start..end].to_vec();
+                }
+                sorted.sort_by(f32::total_cmp);
+                let edges: Vec<f32> = (1..CONTRAST_BINS).map(|k| sorted[k * sorted.len() / CONTRAST_BINS]).collect();
+                for (&idx, &d) in list[start..end].iter().zip(&devs[start..end]) {
+                    bins[idx as usize] = edges.iter().filter(|&&e| d >= e).count() as u8;
+                }
+                start = end;
+            }
+        }
+        self.contrast = bins;
+        self
     }
 }
 
