@@ -372,12 +372,13 @@ impl ParamsBuilder {
     /// positions. It does prefer it: EM's estimate is a vote, a blur where the field is not
     /// coherent, and flat patches fit a blur best. Measured on yellow-granules (translating
     /// ellipse, 24 frames, interior pixels): the flattest fifth of the exemplar's paint gave
-    /// 32 % of the output's matches on the first frame and 50 % on the last, the most textured
-    /// fifth 7 % and 5 %; the output's local contrast followed the matches' exactly (0.041 →
-    /// 0.037 against the exemplar's 0.050), and the paint paled (mean luma 0.775 → 0.801
-    /// against 0.756). A balance over contrast bins is a histogram constraint on the feature
-    /// that fades (Kopf et al. 2007 match histograms in the vote; here it is in the search, so
-    /// the choice of patches changes, not their colors). Per frame, so it does not favour late
+    /// 32 % of the output's matches on the first frame and 54 % on the last, the most textured
+    /// fifth 7 % and 4 %; the output's local contrast followed the matches' exactly (0.041 →
+    /// 0.036 against the exemplar's 0.050), and the paint paled (mean luma 0.775 → 0.790
+    /// against 0.756). With the balance: 27 % → 41 % and 12 % → 8 %, contrast 0.044 → 0.042.
+    /// A balance over contrast bins is a histogram constraint on the feature that fades (Kopf
+    /// et al. 2007 match histograms in the vote; here it is in the search, so the choice of
+    /// patches changes, not their colors). Per frame, so it does not favour late
     /// frames over early ones. On the quality suite (24 frames, 512², with
     /// [`Self::prev_sigma`]): contrast ≥ 0.85 of the exemplar's on 21 of 30 runs instead of 17
     /// (seed 2: 22 instead of 14), mean 0.85 → 0.90, palette mean 0.035 → 0.029, at the cost of
