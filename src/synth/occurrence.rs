@@ -212,19 +212,38 @@ pub(crate) struct Occurrence {
 /// Every voxel of a bin the field uses more than the exemplar holds pays it, whether or not
 /// that voxel is used.
 fn contrast_excess(src: &SourceLevel, nnf: &Nnf, tgt: &TargetLevel, balance: f32) -> [[f32; CONTRAST_BINS]; 2] {
-    let mut count = [[0usize; CONTRAST_BINS]; 2];
+    type Counts = [[usize; CONTRAST_BINS]; 2];
+    let mut count: Counts = [[0; CONTRAST_BINS]; 2];
     if balance > 0.0 && !src.contrast.is_empty() {
-        for (q, m) in nnf.data.iter().enumerate() {
-            if !m.ok || tgt.info[q].flags & IN_MASK == 0 {
-                continue;
+        // Integer counts per row, added: the same for any thread count.
+        let add = |mut a: Counts, b: Counts| {
+            for (ra, rb) in a.iter_mut().zip(b) {
+                for (x, y) in ra.iter_mut().zip(rb) {
+                    *x += y;
+                }
             }
-            if let Some(idx) = src.nearest(m.i as usize, m.x, m.y)
-                && src.contrast[idx] != NO_BIN
-            {
-                let seg = (src.feat[idx][FLAG_LANE] & INTERIOR != 0) as usize;
-                count[seg][src.contrast[idx] as usize] += 1;
-            }
-        }
+            a
+        };
+        count = nnf
+            .data
+            .par_chunks(nnf.w.max(1))
+            .enumerate()
+            .map(|(y, row)| {
+                let mut c: Counts = [[0; CONTRAST_BINS]; 2];
+                for (x, m) in row.iter().enumerate() {
+                    if !m.ok || tgt.info[y * nnf.w + x].flags & IN_MASK == 0 {
+                        continue;
+                    }
+                    if let Some(idx) = src.nearest(m.i as usize, m.x, m.y)
+                        && src.contrast[idx] != NO_BIN
+                    {
+                        let seg = (src.feat[idx][FLAG_LANE] & INTERIOR != 0) as usize;
+                        c[seg][src.contrast[idx] as usize] += 1;
+                    }
+                }
+                c
+            })
+            .reduce(|| [[0; CONTRAST_BINS]; 2], add);
     }
     count.map(|c| {
         let total = c.iter().sum::<usize>().max(1) as f32;
@@ -259,6 +278,10 @@ impl Occurrence {
             self.bins = if src.contrast.len() == len { src.contrast.clone() } else { vec![NO_BIN; len] };
         }
         let excess = contrast_excess(src, nnf, tgt, balance);
+        // The lane's value for `v` = Ω*·k plus the bin's charge, and the value of an unused voxel
+        // of each segment and bin.
+        let lane = |v: f32| if v <= 0.0 { 0 } else { ((255.0 * v.sqrt() + 0.5) as u32).min(255) as u8 };
+        let idle = excess.map(|row| row.map(lane));
         if self.marks.len() != parts() || self.marks.iter().any(|m| m.len() != len) {
             self.marks = vec![vec![0i32; len]; parts()];
         }
@@ -280,8 +303,13 @@ impl Occurrence {
             box_sum(&mut parts, r, |i, run| {
                 for ((f, &b), &c) in feat[i].iter_mut().zip(bins[i].iter()).zip(run) {
                     let seg = (f[FLAG_LANE] & INTERIOR != 0) as usize;
-                    let v = c.max(0) as f32 * k[i][seg] + if b == NO_BIN { 0.0 } else { excess[seg][b as usize] };
-                    f[OMEGA_LANE] = if v <= 0.0 { 0 } else { ((255.0 * v.sqrt() + 0.5) as u32).min(255) as u8 };
+                    f[OMEGA_LANE] = if c <= 0 {
+                        // Unused: the bin's charge alone (the same for every such voxel).
+                        if b == NO_BIN { 0 } else { idle[seg][b as usize] }
+                    } else {
+                        let e = if b == NO_BIN { 0.0 } else { excess[seg][b as usize] };
+                        lane(c as f32 * k[i][seg] + e)
+                    };
                 }
             });
         });
