@@ -9,6 +9,11 @@
 //! carrying the penalty are kept for the whole level ([`Occurrence`]); one parallel pass over
 //! the exemplar's pixels adds the parts, runs the sum along time, writes the penalty and clears
 //! the arrays for the next update.
+//!
+//! The same lane carries the contrast balance ([`contrast_excess`], not in the papers): every
+//! voxel of a contrast bin that the field uses more than the exemplar holds it pays a charge,
+//! so that the search cannot drift to the exemplar's flattest paint, which Ω* (counting
+//! positions) does not see.
 
 use super::nnf::Nnf;
 use super::params::PATCH;
@@ -411,7 +416,7 @@ mod tests {
 
     /// The contrast balance: a field that takes only the exemplar's flattest paint makes every
     /// voxel of that bin pay `μ·λ·(B − 1)` per patch, used or not, and leaves the other bins'
-    /// unused voxels free; a field spread like the exemplar pays (almost) nothing for it.
+    /// unused voxels free; without the balance every unused voxel is free.
     #[test]
     fn contrast_balance_charges_the_overused_bin() {
         let params = Params::builder().build().unwrap();
