@@ -285,8 +285,9 @@ impl Synthesizer {
 
     /// Checks a restored state against the guides of the frame it was saved after (the
     /// previous frame of the next [`Synthesizer::step`]): the saved window must be the one
-    /// that frame's mask gives, and the frames must have the same size. `None` when no frame
-    /// was done. `path` names the state in errors.
+    /// that frame's mask gives, the frames must have the same size, and the `T^ext+` and
+    /// `T^flow` saved with each match must be that frame's. `None` when no frame was done.
+    /// `path` names the state in errors.
     pub fn check_resumed(&self, previous: Option<&FrameGuides>, path: &Path) -> Result<()> {
         let bad = |what: String| Error::Corrupt {
             path: path.to_path_buf(),
@@ -310,6 +311,25 @@ impl Synthesizer {
             return Err(bad(format!(
                 "its working window {saved:?} is not the one of the previous frame's mask {expected:?}"
             )));
+        }
+        // The previous frame's `T^ext+` and `T^flow` saved with each match must be that frame's
+        // own (`T^ext+` scaled by k, as the target's pyramid scales it): a forged value that
+        // passes the checksums would carry that match differently, and the output would differ
+        // from an uninterrupted render's.
+        if let Some(p) = &self.prev {
+            let k = self.ext_factor.unwrap_or(1.0);
+            let (ox, oy) = p.origin;
+            for (q, m) in p.nnf0.data.iter().enumerate() {
+                if !m.ok {
+                    continue;
+                }
+                let (x, y) = (ox + q % p.nnf0.w, oy + q / p.nnf0.w);
+                let e = g.ext_pos.get(x, y);
+                let e = if k != 1.0 { e * k } else { e };
+                if p.ext_pos[q].to_bits() != e.to_bits() || p.flow[q] != g.flow.get(x, y) {
+                    return Err(bad(format!("its motion guides at ({x}, {y}) are not the previous frame's")));
+                }
+            }
         }
         Ok(())
     }
