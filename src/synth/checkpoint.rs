@@ -324,8 +324,8 @@ impl Synthesizer {
                     continue;
                 }
                 let (x, y) = (ox + q % p.nnf0.w, oy + q / p.nnf0.w);
-                let e = g.ext_pos.get(x, y);
-                let e = if k != 1.0 { e * k } else { e };
+                // (x·1 = x exactly: the pyramid's unscaled extents compare alike.)
+                let e = g.ext_pos.get(x, y) * k;
                 if p.ext_pos[q].to_bits() != e.to_bits() || p.flow[q] != g.flow.get(x, y) {
                     return Err(bad(format!("its motion guides at ({x}, {y}) are not the previous frame's")));
                 }

@@ -206,8 +206,6 @@ pub(crate) struct Occurrence {
     feat: Vec<Feat>,
     /// Zeroed marker arrays, one per part of the target.
     marks: Vec<Vec<i32>>,
-    /// The level's contrast bins ([`SourceLevel::contrast`]), in the same columns as `feat`.
-    bins: Vec<u8>,
 }
 
 /// The contrast balance of the field `nnf` (μ = `balance`): per segment and contrast bin of
@@ -219,7 +217,7 @@ pub(crate) struct Occurrence {
 fn contrast_excess(src: &SourceLevel, nnf: &Nnf, tgt: &TargetLevel, balance: f32) -> [[f32; CONTRAST_BINS]; 2] {
     type Counts = [[usize; CONTRAST_BINS]; 2];
     let mut count: Counts = [[0; CONTRAST_BINS]; 2];
-    if balance > 0.0 && !src.contrast.is_empty() {
+    if balance > 0.0 {
         // Integer counts per row, added: the same for any thread count.
         let add = |mut a: Counts, b: Counts| {
             for (ra, rb) in a.iter_mut().zip(b) {
@@ -259,7 +257,7 @@ fn contrast_excess(src: &SourceLevel, nnf: &Nnf, tgt: &TargetLevel, balance: f32
 impl Occurrence {
     /// Buffers for one level (allocated at the first update).
     pub fn new() -> Occurrence {
-        Occurrence { feat: Vec::new(), marks: Vec::new(), bins: Vec::new() }
+        Occurrence { feat: Vec::new(), marks: Vec::new() }
     }
 
     /// Recomputes the penalty of level `src` for the field `nnf` (r = `r`, λ = `lambda`, the
@@ -280,7 +278,6 @@ impl Occurrence {
         let len = src.feat.len();
         if self.feat.len() != len {
             self.feat = src.feat.clone();
-            self.bins = if src.contrast.len() == len { src.contrast.clone() } else { vec![NO_BIN; len] };
         }
         let excess = contrast_excess(src, nnf, tgt, balance);
         // The lane's value for `v` = Ω*·k plus the bin's charge, and the value of an unused voxel
@@ -301,12 +298,14 @@ impl Occurrence {
         let fl = src.frame_len;
         let per = fl.div_ceil(64).max(1);
         let feat = columns(std::iter::once(&mut self.feat[..]), fl, per);
-        let bins = columns(std::iter::once(&mut self.bins[..]), fl, per);
         let marks = columns(self.marks.iter_mut().map(|m| &mut m[..]), fl, per);
-        feat.into_par_iter().zip(bins).zip(marks).for_each(|((mut feat, bins), mut parts)| {
-            let (feat, bins) = (&mut feat[0], &bins[0]);
+        feat.into_par_iter().zip(marks).enumerate().for_each(|(col, (mut feat, mut parts))| {
+            let feat = &mut feat[0];
             box_sum(&mut parts, r, |i, run| {
-                for ((f, &b), &c) in feat[i].iter_mut().zip(bins[i].iter()).zip(run) {
+                // The column's pixels of frame i, read from the level (same layout as `feat`).
+                let start = i * fl + col * per;
+                let bins = &src.contrast[start..start + run.len()];
+                for ((f, &b), &c) in feat[i].iter_mut().zip(bins).zip(run) {
                     let seg = (f[FLAG_LANE] & INTERIOR != 0) as usize;
                     f[OMEGA_LANE] = if c <= 0 {
                         // Unused: the bin's charge alone (the same for every such voxel).
@@ -375,14 +374,20 @@ mod tests {
         out
     }
 
-    #[test]
-    fn counts_and_penalty_lane_match_a_direct_count() {
+    /// A one-level pyramid of a 9-frame disc exemplar and a growing disc's first target level.
+    fn disc_level() -> (SourcePyramid, TargetLevel) {
         let params = Params::builder().build().unwrap();
         let (rgb, g) = disc_exemplar(48, 40, 9, 2);
         let pyr = SourcePyramid::build(&rgb, &g, &params, 4.0, 1);
-        let src = &pyr.levels[0];
         let tg = disc_guides(36, 30, glam::Vec2::new(18.0, 15.0), 11.0, 0.5, 2, 5);
-        let tgt = TargetLevel::new(&tg, &pyr.quant, 4.0, None, src.ext_falloff, [1.0; 3]);
+        let tgt = TargetLevel::new(&tg, &pyr.quant, 4.0, None, pyr.levels[0].ext_falloff, [1.0; 3]);
+        (pyr, tgt)
+    }
+
+    #[test]
+    fn counts_and_penalty_lane_match_a_direct_count() {
+        let (pyr, tgt) = disc_level();
+        let src = &pyr.levels[0];
         let lambda = 0.7;
         let mut occ = Occurrence::new();
         let fields: Vec<Nnf> = (0..3).map(|k| random_field(src, &tgt, k)).collect();
@@ -419,9 +424,7 @@ mod tests {
     /// unused voxels free; without the balance every unused voxel is free.
     #[test]
     fn contrast_balance_charges_the_overused_bin() {
-        let params = Params::builder().build().unwrap();
-        let (rgb, g) = disc_exemplar(48, 40, 9, 2);
-        let pyr = SourcePyramid::build(&rgb, &g, &params, 4.0, 1);
+        let (pyr, tgt) = disc_level();
         let src = &pyr.levels[0];
         // Every frame's in-mask centers of a segment are split into equal shares.
         for i in 0..src.frames {
@@ -442,8 +445,6 @@ mod tests {
                 }
             }
         }
-        let tg = disc_guides(36, 30, glam::Vec2::new(18.0, 15.0), 11.0, 0.5, 2, 5);
-        let tgt = TargetLevel::new(&tg, &pyr.quant, 4.0, None, src.ext_falloff, [1.0; 3]);
         let (lambda, mu) = (0.7, 2.0);
         let n2 = (PATCH * PATCH) as f32;
         // Every matched pixel moved onto one flattest-bin center of its own segment.

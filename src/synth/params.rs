@@ -705,15 +705,17 @@ impl ParamsBuilder {
         finite_nonneg("flow-weight", p.weights.w_ext)?;
         finite_nonneg("prev-weight", p.weights.w_prev)?;
         finite_nonneg("color-weight", p.weights.w_color)?;
-        if !(p.schedule.vote_sigma.is_finite() && (0.0..=10.0).contains(&p.schedule.vote_sigma)) {
-            return Err(Error::param("vote-sigma", p.schedule.vote_sigma, "0..=10 pixels"));
-        }
-        if !(p.schedule.estimate_sigma.is_finite() && (0.0..=10.0).contains(&p.schedule.estimate_sigma)) {
-            return Err(Error::param("estimate-sigma", p.schedule.estimate_sigma, "0..=10 pixels"));
-        }
-        if !(p.schedule.prev_sigma.is_finite() && (0.0..=10.0).contains(&p.schedule.prev_sigma)) {
-            return Err(Error::param("prev-sigma", p.schedule.prev_sigma, "0..=10 pixels"));
-        }
+        // The σ of a vote's center weighting.
+        let vote_sigma = |name: &str, v: f32| {
+            if v.is_finite() && (0.0..=10.0).contains(&v) {
+                Ok(())
+            } else {
+                Err(Error::param(name, v, "0..=10 pixels"))
+            }
+        };
+        vote_sigma("vote-sigma", p.schedule.vote_sigma)?;
+        vote_sigma("estimate-sigma", p.schedule.estimate_sigma)?;
+        vote_sigma("prev-sigma", p.schedule.prev_sigma)?;
         finite_nonneg("lambda", p.weights.lambda)?;
         finite_nonneg("contrast-balance", p.weights.contrast_balance)?;
         if !(p.weights.coherence.is_finite() && (1.0..=100.0).contains(&p.weights.coherence)) {
