@@ -14,11 +14,15 @@ const SIDE: usize = 512;
 const FRAMES: usize = 24;
 const PAPER: Rgb = [0.953, 0.941, 0.929];
 
-/// A target: its frames' coverages.
+/// Motion of a target from frame k to k + 1, where it is known (`None` where it is not).
+type Motion = Box<dyn Fn(usize) -> Option<Plane<Option<glam::Vec2>>> + Sync>;
+
+/// A target: its frames' coverages, and its true motion when known.
 struct Seq {
     frames: usize,
     size: (usize, usize),
     cov: Box<dyn Fn(usize) -> Plane<f32> + Sync>,
+    motion: Option<Motion>,
 }
 
 impl Seq {
@@ -30,15 +34,21 @@ impl Seq {
 /// A generated target: a shape that moves, at the size users run.
 fn target(kind: TargetKind) -> Seq {
     let t = Target::new(kind, SIDE, FRAMES);
-    Seq { frames: FRAMES, size: (SIDE, SIDE), cov: Box::new(move |k| t.coverage(k)) }
+    Seq { frames: FRAMES, size: (SIDE, SIDE), cov: Box::new(move |k| t.coverage(k)), motion: None }
 }
 
 /// Layer `layer` of a Lottie animation, frames `range`.
 fn animation(path: &str, layer: &str, range: std::ops::Range<usize>) -> Seq {
-    let a = fluidymation::anim::load(std::path::Path::new(path), &Default::default()).unwrap();
+    let a = std::sync::Arc::new(fluidymation::anim::load(std::path::Path::new(path), &Default::default()).unwrap());
     let r = a.find_region(layer).unwrap();
     let size = (a.width as usize, a.height as usize);
-    Seq { frames: range.len(), size, cov: Box::new(move |k| a.render(r, range.start + k).unwrap().coverage()) }
+    let (b, start) = (a.clone(), range.start);
+    Seq {
+        frames: range.len(),
+        size,
+        cov: Box::new(move |k| a.render(r, start + k).unwrap().coverage()),
+        motion: Some(Box::new(move |k| b.fill_motion(r, start + k).unwrap())),
+    }
 }
 
 /// Paintings of frames `keys` of `t`: the engine's own output with an exemplar (ink-rims, whose
@@ -143,6 +153,25 @@ fn measure(t: &Seq, frames: &[KeyedFrame], key: &Keyframe) -> Report {
 /// Motion agreement of `frames` against a motion of the target known to be `v` everywhere (px
 /// per frame), instead of the normal motion its masks reveal ([`eval::motion_agreement_with`]).
 fn agreement_with_translation(t: &Seq, frames: &[KeyedFrame], v: glam::Vec2) -> f32 {
+    agreement_with(t, frames, &|_, _, _| Some(v))
+}
+
+/// Motion agreement of `frames` against the target's true motion (`t.motion`: for a Lottie
+/// layer, the step of the transforms its fills are drawn with), where it is known.
+fn agreement_with_true_motion(t: &Seq, frames: &[KeyedFrame]) -> Option<f32> {
+    let motion = t.motion.as_ref()?;
+    let steps: Vec<Option<Plane<Option<glam::Vec2>>>> = (0..t.frames - 1).map(motion).collect();
+    // Frame i's motion is the step from frame i − 1.
+    Some(agreement_with(t, frames, &|i, x, y| steps[i - 1].as_ref()?.get(x, y)))
+}
+
+/// Motion agreement of `frames` against `motion(i, x, y)`, the target's motion from frame i − 1
+/// to i ([`eval::motion_agreement_with`]).
+fn agreement_with(
+    t: &Seq,
+    frames: &[KeyedFrame],
+    motion: &(dyn Fn(usize, usize, usize) -> Option<glam::Vec2> + Sync),
+) -> f32 {
     let lumas: Vec<Plane<f32>> = frames
         .iter()
         .map(|f| {
@@ -153,7 +182,7 @@ fn agreement_with_translation(t: &Seq, frames: &[KeyedFrame], v: glam::Vec2) -> 
         .collect();
     let masks: Vec<Plane<f32>> = (0..t.frames).map(|k| t.coverage(k)).collect();
     let shapes = eval::Shape::sequence(&masks);
-    eval::motion_agreement_with(&lumas, &shapes, &EvalOptions::default().motion, &|_, _, _| Some(v)).value.unwrap()
+    eval::motion_agreement_with(&lumas, &shapes, &EvalOptions::default().motion, motion).value.unwrap()
 }
 
 /// PSNR (dB) of `a` against `b` over the pixels of `mask` ([`quality::PSNR_CAP`] where they
@@ -277,6 +306,57 @@ fn two_keyframes_pass_from_one_painting_to_the_next() {
     assert!(share_b.windows(2).all(|w| w[1] >= w[0] - 0.03), "{share_b:?}");
 }
 
+/// A ball that drifts down and to the right, squashes half-way and turns all the while (60°
+/// over 24 frames), written as a Lottie file (512 × 512, 24 fps): its motion is in its
+/// group's animated position, scale and rotation, as an animator keys it. It moves at most
+/// about 5 px a frame, within the reach of the motion measure's block matcher (6 px). A disc
+/// that turns looks still to its masks; its transforms know the turn.
+fn turning_ball() -> Seq {
+    use serde_json::json;
+    let linear = json!({"i": {"x": [1], "y": [1]}, "o": {"x": [0], "y": [0]}});
+    let key = |t: u32, s: serde_json::Value| {
+        let mut k = linear.clone();
+        k["t"] = json!(t);
+        k["s"] = s;
+        k
+    };
+    let tr = json!({"ty": "tr", "a": {"a": 0, "k": [0, 0]}, "o": {"a": 0, "k": 100},
+        "p": {"a": 1, "k": [key(0, json!([200, 210])), key(23, json!([290, 280]))]},
+        "s": {"a": 1, "k": [key(0, json!([100, 100])), key(10, json!([100, 100])), key(12, json!([112, 90])),
+                            key(14, json!([100, 100])), key(23, json!([100, 100]))]},
+        "r": {"a": 1, "k": [key(0, json!([0])), key(23, json!([60]))]}});
+    let doc = json!({"v": "5.7.1", "fr": 24, "ip": 0, "op": 24, "w": 512, "h": 512, "layers": [
+        {"ty": 4, "nm": "ball", "ind": 1, "ip": 0, "op": 24, "st": 0, "ks": {}, "shapes": [
+            {"ty": "gr", "nm": "ball", "it": [
+                {"ty": "el", "p": {"a": 0, "k": [0, 0]}, "s": {"a": 0, "k": [150, 150]}},
+                {"ty": "fl", "c": {"a": 0, "k": [0.2, 0.3, 0.8, 1]}, "o": {"a": 0, "k": 100}, "r": 1},
+                tr]}]}]});
+    let dir = std::env::temp_dir().join(format!("fm-keyframes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("ball.json");
+    std::fs::write(&path, doc.to_string()).unwrap();
+    animation(path.to_str().unwrap(), "ball", 0..24)
+}
+
+/// Texture moves with the parts: the [`turning_ball`], painted once in the middle, against
+/// the whole motion its transforms give ([`fluidymation::anim::Animation::fill_motion`]), not
+/// only the normal part its masks show. Measured: carried 0.87, painted frame by frame 0.30;
+/// the same ball without the turn 0.98 and 0.32 (and the corpus's bouncing ball, which does not
+/// turn, `keyframes_on_animations`: 0.97–0.98 against 0.33–0.36). The turn is what the carry
+/// misses: the engine's flow comes from the masks, which do not show it.
+/// Floors: carried ≥ 0.75 (0.87 less 0.12; the issue's 0.7), painted alone ≤ 0.55 (0.30 plus
+/// 0.25: the measure tells the two apart).
+#[test]
+fn texture_moves_with_a_turning_ball() {
+    let t = turning_ball();
+    let keys = paintings(&t, &[11]);
+    let carried = agreement_with_true_motion(&t, &paint(&t, &keys)).unwrap();
+    let alone = agreement_with_true_motion(&t, &independent(&t, &keys[0])).unwrap();
+    println!("agreement with the ball's true motion: carried {carried:.3}, painted alone {alone:.3}");
+    assert!(carried >= 0.75, "carried {carried}");
+    assert!(alone <= 0.55, "alone {alone}");
+}
+
 /// The issue's measures on layers of real animations — the demo's dress, the corpus's bouncing
 /// ball and its parenting star (a polygon turning about a moving parent) — with one keyframe in the middle and with two at the ends
 /// (48 frames each; the paintings are ink-rims paint of the layer's own shape). Prints a table
@@ -294,9 +374,9 @@ fn keyframes_on_animations() {
         ("parenting star", animation(&format!("{corpus}docs_parenting.json"), "PolyStar", 0..48)),
     ];
     println!(
-        "| layer | keyframes | PSNR at the keys | lowest contrast (frame) | incoherent change (alone) | ratio | motion |"
+        "| layer | keyframes | PSNR at the keys | lowest contrast (frame) | incoherent change (alone) | ratio | motion | true motion (alone) |"
     );
-    println!("|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|");
     for (name, t) in &cases {
         for keys_at in [vec![23], vec![0, 47]] {
             let keys = paintings(t, &keys_at);
@@ -306,13 +386,18 @@ fn keyframes_on_animations() {
                 .map(|k| psnr(&out[k.frame].rgb, &k.painting, &t.coverage(k.frame)))
                 .fold(f32::INFINITY, f32::min);
             let r = measure(t, &out, &keys[0]);
-            let alone = measure(t, &independent(t, &keys[0]), &keys[0]);
+            let alone_frames = independent(t, &keys[0]);
+            let alone = measure(t, &alone_frames, &keys[0]);
             let (frame, low) = lowest_contrast(&r, &keys_at);
             let (a, b) = (r.summary.incoherent_change.unwrap(), alone.summary.incoherent_change.unwrap());
             let motion = r.summary.motion_agreement.unwrap_or(f32::NAN);
+            // Against the layer's whole motion from its transforms, and the same for the
+            // frames painted each on their own.
+            let true_motion = agreement_with_true_motion(t, &out).unwrap_or(f32::NAN);
+            let true_alone = agreement_with_true_motion(t, &alone_frames).unwrap_or(f32::NAN);
             let keys_1: Vec<usize> = keys_at.iter().map(|k| k + 1).collect();
             println!(
-                "| {name} | {keys_1:?} | {at_keys:.1} dB | {low:.2} ({frame}) | {a:.4} ({b:.4}) | {:.2} | {motion:.2} |",
+                "| {name} | {keys_1:?} | {at_keys:.1} dB | {low:.2} ({frame}) | {a:.4} ({b:.4}) | {:.2} | {motion:.2} | {true_motion:.2} ({true_alone:.2}) |",
                 a / b
             );
             assert!(at_keys >= 35.0 && low >= 0.8, "{name} {keys_1:?}");

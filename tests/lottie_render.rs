@@ -336,3 +336,52 @@ fn exponential_precomp_reuse_is_refused_before_drawing() {
     let text = e.to_string();
     assert!(text.contains("layers drawn per frame for layer 'top'") && text.contains("at most 10000"), "{text}");
 }
+
+/// `Animation::fill_motion`: the whole motion of a fill from the transforms it is drawn with —
+/// here a square whose layer slides right 1 px a frame while its group turns 9° a frame about
+/// the square's center. Every covered pixel's motion is the composed step `M′·M⁻¹·p − p`,
+/// including the tangential part a mask cannot show (the turn moves the corners by up to
+/// 1.1 px a frame though the square's outline hardly changes). A fill that fades out leaves
+/// no motion to give, nor does the last frame.
+#[test]
+fn fill_motion_is_the_transforms_step() {
+    let mut l = rect_layer("turning", 1, 10.0, 10.0, 10.0, 10.0, [1.0, 1.0, 1.0, 1.0]);
+    let linear = json!({"x": [1], "y": [1]});
+    let start = json!({"x": [0], "y": [0]});
+    l["ks"] = json!({"p": {"a": 1, "k": [
+        {"t": 0, "s": [0, 0], "i": linear, "o": start}, {"t": 10, "s": [10, 0]}]}});
+    // The group turns about the square's center (15, 15): anchor and position there.
+    l["shapes"][0]["it"][2] = json!({"ty": "tr", "p": st(json!([15, 15])), "a": st(json!([15, 15])),
+        "s": st(json!([100, 100])), "o": st(json!(100)),
+        "r": {"a": 1, "k": [{"t": 0, "s": [0], "i": linear, "o": start}, {"t": 10, "s": [90]}]}});
+    let a = anim_of(&doc(vec![l]), &LoadOptions::default());
+    let frame = 4;
+    let v = a.fill_motion(0, frame).unwrap().expect("a Lottie fill's motion");
+    let (th0, th1) = ((9.0 * frame as f32).to_radians(), (9.0 * (frame + 1) as f32).to_radians());
+    let center0 = glam::Vec2::new(15.0 + frame as f32, 15.0);
+    let (mut covered, mut largest) = (0, 0f32);
+    for y in 0..40 {
+        for x in 0..40 {
+            let Some(m) = v.get(x, y) else { continue };
+            covered += 1;
+            let p = glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            // Back to the square's own frame at frame 4, forward at frame 5.
+            let local = glam::Vec2::from_angle(-th0).rotate(p - center0);
+            let next = glam::Vec2::from_angle(th1).rotate(local) + center0 + glam::Vec2::new(1.0, 0.0);
+            assert!((m - (next - p)).length() < 1e-3, "({x}, {y}): {m} against {}", next - p);
+            largest = largest.max(m.length());
+        }
+    }
+    // The square (100 px) at 36°: about 100 covered pixels; corners move farthest.
+    assert!((90..=110).contains(&covered), "{covered} pixels with a motion");
+    assert!(largest > 1.5, "largest motion {largest}");
+    assert!(a.fill_motion(0, 9).unwrap().is_none(), "the last frame has no next");
+    assert!(a.fill_motion(3, 0).is_err(), "no region 3");
+
+    // Fading out at frame 6: the fills of frames 5 and 6 differ, so no motion is given there.
+    let mut l = rect_layer("fading", 1, 10.0, 10.0, 10.0, 10.0, [1.0, 1.0, 1.0, 1.0]);
+    l["ks"] = json!({"o": {"a": 1, "k": [{"t": 5, "s": [100], "h": 1}, {"t": 6, "s": [0]}]}});
+    let a = anim_of(&doc(vec![l]), &LoadOptions::default());
+    assert!(a.fill_motion(0, 4).unwrap().is_some());
+    assert!(a.fill_motion(0, 5).unwrap().is_none());
+}

@@ -189,6 +189,12 @@ pub(crate) trait RegionRenderer: Send + Sync {
     /// Renders region number `region` (position in [`Animation::regions`]) at frame `frame`
     /// at the animation's (scaled) size.
     fn render(&self, region: usize, frame: usize) -> Result<RegionFrame>;
+
+    /// The motion of region `region` from frame `frame` to the next, where the format knows
+    /// it ([`Animation::fill_motion`]); `None` by default.
+    fn fill_motion(&self, _region: usize, _frame: usize) -> Option<Plane<Option<glam::Vec2>>> {
+        None
+    }
 }
 
 /// A loaded animation.
@@ -256,6 +262,30 @@ impl Animation {
 
     /// Renders region number `region` (position in [`Animation::regions`]) at `frame`.
     pub fn render(&self, region: usize, frame: usize) -> Result<RegionFrame> {
+        self.check(region, frame)?;
+        self.renderer.render(region, frame)
+    }
+
+    /// The true motion of region `region` from frame `frame` to `frame + 1`, pixels per frame,
+    /// per pixel of the canvas (`None` where none of its fills is), where the file gives it.
+    ///
+    /// A Lottie file draws each fill in its own coordinates under a chain of transforms
+    /// (layer, parents, precomps, groups, repeater copies), so a point of a fill moves by
+    /// `M′·M⁻¹`, M and M′ the chain at the two frames: the whole motion, where a mask shows
+    /// only its normal part (a turning disc looks still). Geometry animated in the fill's own
+    /// coordinates (path keyframes, an ellipse's size, a trim) is not in it. `Ok(None)` for SVG
+    /// sequences, at the last frame, and when the two frames do not draw the same fills (one
+    /// appears or fades out entirely).
+    pub fn fill_motion(&self, region: usize, frame: usize) -> Result<Option<Plane<Option<glam::Vec2>>>> {
+        self.check(region, frame)?;
+        if frame + 1 == self.frames {
+            return Ok(None);
+        }
+        Ok(self.renderer.fill_motion(region, frame))
+    }
+
+    /// An error unless `region` and `frame` are one of the animation's.
+    fn check(&self, region: usize, frame: usize) -> Result<()> {
         if region >= self.regions.len() {
             return Err(Error::UnknownLayer {
                 name: region.to_string(),
@@ -265,7 +295,7 @@ impl Animation {
         if frame >= self.frames {
             return Err(Error::param("frame", frame, format!("0..{}", self.frames)));
         }
-        self.renderer.render(region, frame)
+        Ok(())
     }
 
     /// Duration in seconds.

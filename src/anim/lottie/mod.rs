@@ -320,6 +320,12 @@ impl RegionRenderer for LottieRenderer {
         };
         Ok(RegionFrame { fill, strokes, opacity_in_alpha: true })
     }
+
+    fn fill_motion(&self, region: usize, frame: usize) -> Option<Plane<Option<glam::Vec2>>> {
+        let t = self.model.ip + frame as f32;
+        let target = *self.targets.get(region)?;
+        render::fill_motion(&self.model, target, t, t + 1.0, self.width, self.height, self.scale)
+    }
 }
 
 /// The dominant color (area-weighted mode over a 5-bit-per-channel histogram) of a region,

@@ -84,6 +84,16 @@ struct Ctx<'a> {
     width: u32,
     height: u32,
     draws: std::cell::Cell<usize>,
+    /// When set, fills are recorded here instead of drawn ([`fill_motion`]).
+    record: Option<std::cell::RefCell<Vec<FillRecord>>>,
+}
+
+/// One fill as the rasterizer would draw it: its path in its own coordinates, the transform
+/// to the canvas and its fill rule.
+struct FillRecord {
+    path: tiny_skia::Path,
+    m: Affine2,
+    rule: FillRule,
 }
 
 /// How a layer or a list of shape items is drawn: the state passed down from the enclosing
@@ -102,6 +112,8 @@ struct Draw<'a> {
     pass: Pass,
     /// Precomp nesting depth.
     depth: usize,
+    /// Drawn as a track matte (not part of the region's own paint).
+    matte: bool,
 }
 
 /// Why a layer is drawn.
@@ -134,15 +146,89 @@ pub fn render(model: &Model, target: Target, time: f32, width: u32, height: u32,
         // Sizes are validated at load; a 1×1 pixmap always exists.
         return Pixmap::new(1, 1).unwrap_or_else(|| unreachable!());
     };
-    let ctx = Ctx { model, width: pm.width(), height: pm.height(), draws: std::cell::Cell::new(0) };
-    let d = Draw { t: time, m: Affine2::from_scale(Vec2::splat(scale)), alpha: 1.0, clip: None, pass, depth: 0 };
-    if target.layer < model.comps[0].layers.len() {
-        ctx.draw_layer(0, target.layer, Role::Region(target.child), d, &mut pm);
-    }
+    let ctx = Ctx { model, width: pm.width(), height: pm.height(), draws: std::cell::Cell::new(0), record: None };
+    ctx.draw_region(target, time, scale, pass, &mut pm);
     pm
 }
 
+/// The motion of the fills of `target` from composition time `time` to `next`, per
+/// pixel of a `width × height` canvas scaled by `scale` (pixels; `None` where no fill is).
+///
+/// Each fill is drawn in its own coordinates under a transform to the canvas — the layer's,
+/// its parents', the enclosing precomps', groups' and repeater copies' — so a point of the
+/// fill at canvas position p at `time` is at `M′·M⁻¹·p` at `next`, M and M′ the fill's
+/// transforms at the two times. Where fills overlap, the top-most one's motion is given.
+/// This is the motion of the fills' coordinates: geometry animated in them (path keyframes,
+/// an ellipse's size, a trim) is not in it. `None` when the two times do not draw the same
+/// number of fills (one appears, disappears or fades out entirely), or when there is none.
+pub(crate) fn fill_motion(
+    model: &Model,
+    target: Target,
+    time: f32,
+    next: f32,
+    width: u32,
+    height: u32,
+    scale: f32,
+) -> Option<crate::img::Plane<Option<Vec2>>> {
+    let record = |t: f32| -> Option<Vec<FillRecord>> {
+        let mut pm = Pixmap::new(width.max(1), height.max(1))?;
+        let ctx = Ctx {
+            model,
+            width: pm.width(),
+            height: pm.height(),
+            draws: std::cell::Cell::new(0),
+            record: Some(std::cell::RefCell::new(Vec::new())),
+        };
+        ctx.draw_region(target, t, scale, Pass::Fills, &mut pm);
+        ctx.record.map(|r| r.into_inner())
+    };
+    let (from, to) = (record(time)?, record(next)?);
+    if from.is_empty() || from.len() != to.len() {
+        return None;
+    }
+    let (w, h) = (width.max(1) as usize, height.max(1) as usize);
+    let mut out = crate::img::Plane::new(w, h);
+    let mut cover = Mask::new(w as u32, h as u32)?;
+    // Bottom-most first: a fill drawn later covers the ones before it.
+    for (a, b) in from.iter().zip(&to) {
+        let det = a.m.matrix2.determinant();
+        let Some(ts) = to_ts(&a.m) else { continue };
+        if !det.is_finite() || det.abs() < 1e-12 {
+            continue;
+        }
+        let step = b.m * a.m.inverse();
+        cover.clear();
+        cover.fill_path(&a.path, a.rule, false, ts);
+        for (k, &c) in cover.data().iter().enumerate() {
+            if c > 127 {
+                let p = Vec2::new((k % w) as f32 + 0.5, (k / w) as f32 + 0.5);
+                let v = step.transform_point2(p) - p;
+                if v.is_finite() {
+                    out.data_mut()[k] = Some(v);
+                }
+            }
+        }
+    }
+    Some(out)
+}
+
 impl Ctx<'_> {
+    /// Draws `target` at composition time `time`, the canvas scaled by `scale`.
+    fn draw_region(&self, target: Target, time: f32, scale: f32, pass: Pass, pm: &mut Pixmap) {
+        let d = Draw {
+            t: time,
+            m: Affine2::from_scale(Vec2::splat(scale)),
+            alpha: 1.0,
+            clip: None,
+            pass,
+            depth: 0,
+            matte: false,
+        };
+        if target.layer < self.model.comps[0].layers.len() {
+            self.draw_layer(0, target.layer, Role::Region(target.child), d, pm);
+        }
+    }
+
     fn comp(&self, c: usize) -> &Composition {
         &self.model.comps[c]
     }
@@ -201,7 +287,7 @@ impl Ctx<'_> {
         if let Some((mode, src)) = layer.matte {
             let Some(mut mp) = self.new_pixmap() else { return };
             // The matte source is drawn whole (fills and strokes), with the same outer transform.
-            let matte = Draw { alpha: 1.0, pass: Pass::All, depth: d.depth + 1, ..d };
+            let matte = Draw { alpha: 1.0, pass: Pass::All, depth: d.depth + 1, matte: true, ..d };
             self.draw_layer(c, src, Role::Matte, matte, &mut mp);
             let mut mask = Mask::from_pixmap(
                 mp.as_ref(),
@@ -232,6 +318,12 @@ impl Ctx<'_> {
                 paint.set_color(rgba(color, d.alpha));
                 let path = tiny_skia::PathBuilder::from_rect(rect);
                 if !drawable(&path, ts, 0.0) {
+                    return;
+                }
+                if let Some(record) = &self.record {
+                    if !d.matte {
+                        record.borrow_mut().push(FillRecord { path, m: d.m, rule: FillRule::Winding });
+                    }
                     return;
                 }
                 target.fill_path(&path, &paint, FillRule::Winding, ts, d.clip);
@@ -402,6 +494,12 @@ impl Ctx<'_> {
         }
         let (Some(path), Some(ts)) = (geom::to_skia_path(paths), to_ts(&d.m)) else { return };
         if !drawable(&path, ts, 0.0) {
+            return;
+        }
+        if let Some(record) = &self.record {
+            if !d.matte {
+                record.borrow_mut().push(FillRecord { path, m: d.m, rule });
+            }
             return;
         }
         let Some(p) = make_paint(paint, d.alpha, d.t) else { return };
