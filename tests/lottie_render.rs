@@ -341,8 +341,8 @@ fn exponential_precomp_reuse_is_refused_before_drawing() {
 /// here a square whose layer slides right 1 px a frame while its group turns 9° a frame about
 /// the square's center. Every covered pixel's motion is the composed step `M′·M⁻¹·p − p`,
 /// including the tangential part a mask cannot show (the turn moves the corners by up to
-/// 1.1 px a frame though the square's outline hardly changes). A fill that fades out leaves
-/// no motion to give, nor does the last frame.
+/// 1.5 px a frame though the square's outline hardly changes). A fill whose own shape is
+/// animated, or that fades out, leaves no motion to give, nor does the last frame.
 #[test]
 fn fill_motion_is_the_transforms_step() {
     let mut l = rect_layer("turning", 1, 10.0, 10.0, 10.0, 10.0, [1.0, 1.0, 1.0, 1.0]);
@@ -377,6 +377,14 @@ fn fill_motion_is_the_transforms_step() {
     assert!(largest > 1.5, "largest motion {largest}");
     assert!(a.fill_motion(0, 9).unwrap().is_none(), "the last frame has no next");
     assert!(a.fill_motion(3, 0).is_err(), "no region 3");
+
+    // A square that grows in its own coordinates (its size keyed): its outline moves in a way
+    // no transform says, so no motion is given.
+    let mut l = rect_layer("growing", 1, 10.0, 10.0, 10.0, 10.0, [1.0, 1.0, 1.0, 1.0]);
+    l["shapes"][0]["it"][0]["s"] = json!({"a": 1, "k": [
+        {"t": 0, "s": [10, 10], "i": linear, "o": start}, {"t": 10, "s": [20, 20]}]});
+    let a = anim_of(&doc(vec![l]), &LoadOptions::default());
+    assert!(a.fill_motion(0, 4).unwrap().is_none());
 
     // Fading out at frame 6: the fills of frames 5 and 6 differ, so no motion is given there.
     let mut l = rect_layer("fading", 1, 10.0, 10.0, 10.0, 10.0, [1.0, 1.0, 1.0, 1.0]);

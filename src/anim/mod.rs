@@ -190,9 +190,9 @@ pub(crate) trait RegionRenderer: Send + Sync {
     /// at the animation's (scaled) size.
     fn render(&self, region: usize, frame: usize) -> Result<RegionFrame>;
 
-    /// The motion of region `region` from frame `frame` to the next, where the format knows
-    /// it ([`Animation::fill_motion`]); `None` by default.
-    fn fill_motion(&self, _region: usize, _frame: usize) -> Option<Plane<Option<glam::Vec2>>> {
+    /// The motion of region `region` from frame `from` to frame `to`, where the format knows
+    /// it ([`Animation::fill_motion_to`]); `None` by default.
+    fn fill_motion(&self, _region: usize, _from: usize, _to: usize) -> Option<Plane<Option<glam::Vec2>>> {
         None
     }
 }
@@ -272,16 +272,25 @@ impl Animation {
     /// A Lottie file draws each fill in its own coordinates under a chain of transforms
     /// (layer, parents, precomps, groups, repeater copies), so a point of a fill moves by
     /// `M′·M⁻¹`, M and M′ the chain at the two frames: the whole motion, where a mask shows
-    /// only its normal part (a turning disc looks still). Geometry animated in the fill's own
-    /// coordinates (path keyframes, an ellipse's size, a trim) is not in it. `Ok(None)` for SVG
-    /// sequences, at the last frame, and when the two frames do not draw the same fills (one
-    /// appears or fades out entirely).
+    /// only its normal part (a turning disc looks still). That holds while every fill keeps its
+    /// shape in its own coordinates: `Ok(None)` when one does not (path keyframes, an ellipse's
+    /// size, a trim — a waving outline moves in ways no transform says), for SVG sequences, at
+    /// the last frame, and when the two frames do not draw the same fills (one appears or fades
+    /// out entirely).
     pub fn fill_motion(&self, region: usize, frame: usize) -> Result<Option<Plane<Option<glam::Vec2>>>> {
         self.check(region, frame)?;
         if frame + 1 == self.frames {
             return Ok(None);
         }
-        Ok(self.renderer.fill_motion(region, frame))
+        self.fill_motion_to(region, frame, frame + 1)
+    }
+
+    /// [`Animation::fill_motion`] from frame `from` to frame `to`, either way in time (the
+    /// backward passes of painted keyframes carry paint from a frame to the one before it).
+    pub fn fill_motion_to(&self, region: usize, from: usize, to: usize) -> Result<Option<Plane<Option<glam::Vec2>>>> {
+        self.check(region, from)?;
+        self.check(region, to)?;
+        Ok(self.renderer.fill_motion(region, from, to))
     }
 
     /// An error unless `region` and `frame` are one of the animation's.

@@ -191,7 +191,7 @@ fn run_keyframes(args: &Args, anim: &anim::Animation, params: fluidymation::synt
         Ok(())
     };
     // The bar counts the frames both passes paint (two per frame between keyframes).
-    keyframes::paint(&params, anim.frames, &coverage, &keys, &mut emit, "frames", &bars)
+    keyframes::paint(&params, anim.frames, &coverage, None, &keys, &mut emit, "frames", &bars)
         .context("painting from the keyframes")?;
     let synthesized = anim.frames - keys.len();
     bars.clear();

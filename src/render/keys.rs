@@ -199,7 +199,9 @@ pub(crate) fn paint_regions(
             };
             let stage = format!("keys {}", super::stage_name(anim, region));
             let t0 = std::time::Instant::now();
-            keyframes::paint(&opts.params, range.len(), &coverage, keys, &mut emit, &stage, progress)?;
+            // The layer's true motion from its transforms, where the file gives it.
+            let motion = |a: usize, b: usize| anim.fill_motion_to(region, range.start + a, range.start + b);
+            keyframes::paint(&opts.params, range.len(), &coverage, Some(&motion), keys, &mut emit, &stage, progress)?;
             let seconds = t0.elapsed().as_secs_f64();
             img::atomic_write(&complete, |w| write!(w, "{}", range.len()))?;
             Ok(Some(KeyedFrames { dir, seconds }))

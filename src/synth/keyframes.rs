@@ -24,6 +24,14 @@
 //! seam between a blob of A and one of B are the two cross-faded, over `SEAM` (1) pixel to each
 //! side, which softens the blobs' straight edges without a visible blend.
 //!
+//! **The target's motion** is its flow guide, estimated from the masks — or, where the caller
+//! knows the target's true motion for every step of a pass ([`Motion`]; for a Lottie layer whose
+//! fills keep their shapes, the step of their transforms,
+//! [`crate::anim::Animation::fill_motion_to`]), that motion: masks show only the normal part of
+//! a motion (a turning disc looks still), so paint carried along them slides over a part that
+//! turns. The guides' other channels are computed from it as from an estimated flow (a still
+//! has no motion extents of its own, so the target's add the same cost to every candidate).
+//!
 //! The choice is known before either pass paints anything (it depends on the target alone), so
 //! **each pass paints only the part of the frame it gives** — the forward pass where A's paint
 //! is still seen, the backward pass where B's already is, each with a margin of `MARGIN` (3)
@@ -119,14 +127,22 @@ pub fn key_source(key: &Keyframe, coverage: &Plane<f32>, params: &Params) -> Res
 /// The coverage of target frame k.
 pub type Coverage<'a> = &'a (dyn Fn(usize) -> Result<Plane<f32>> + Sync);
 
+/// The target's true motion from frame `from` to frame `to` (neighbours, either way in time),
+/// pixels, where it is known — for a Lottie layer, the step of the transforms its fills are
+/// drawn with ([`crate::anim::Animation::fill_motion_to`]): per pixel, `None` where it is not
+/// known; `Ok(None)` when it is not known for that pair at all.
+pub type Motion<'a> = &'a (dyn Fn(usize, usize) -> Result<Option<Plane<Option<Vec2>>>> + Sync);
+
 /// Paints every frame of a `frames`-frame target from its painted keyframes `keys` (any order;
 /// at least one, at most one per frame) and hands them to `emit` in order, frame index first.
 /// Reports every frame synthesized, in either pass, to `progress` as one unit of `stage` (of
 /// [`pass_frames`] in all); when it asks to stop, returns [`Error::Cancelled`].
+#[allow(clippy::too_many_arguments)]
 pub fn paint(
     params: &Params,
     frames: usize,
     coverage: Coverage<'_>,
+    motion: Option<Motion<'_>>,
     keys: &[Keyframe],
     emit: &mut dyn FnMut(usize, KeyedFrame) -> Result<()>,
     stage: &str,
@@ -161,7 +177,7 @@ pub fn paint(
     if first > 0 {
         let seq: Vec<usize> = (0..=first).rev().collect();
         let mut held = Held::new(first);
-        pass(&sources[0], params, &seq, guides(&seq, coverage, params)?, &mut |_, _| {}, &mut |j, out| {
+        pass(&sources[0], params, &seq, guides(&seq, coverage, motion, params)?, &mut |_, _| {}, &mut |j, out| {
             tick()?;
             held.put(j, out);
             Ok(())
@@ -175,10 +191,17 @@ pub fn paint(
         let Some(next) = keys.get(a + 1) else {
             // After the last keyframe: forward from it.
             let seq: Vec<usize> = (key.frame..frames).collect();
-            return pass(&sources[a], params, &seq, guides(&seq, coverage, params)?, &mut |_, _| {}, &mut |j, out| {
-                tick()?;
-                emit(j, KeyedFrame { rgb: out.rgb, mask: out.mask })
-            });
+            return pass(
+                &sources[a],
+                params,
+                &seq,
+                guides(&seq, coverage, motion, params)?,
+                &mut |_, _| {},
+                &mut |j, out| {
+                    tick()?;
+                    emit(j, KeyedFrame { rgb: out.rgb, mask: out.mask })
+                },
+            );
         };
         let (ka, kb) = (key.frame, next.frame);
         if kb == ka + 1 {
@@ -196,8 +219,8 @@ pub fn paint(
         // that waits for the pool could leave no thread to run it.
         let mut stream_b = None;
         rayon::in_place_scope(|s| -> Result<()> {
-            s.spawn(|_| stream_b = Some(guides(&seq_b, coverage, params)));
-            let stream_a = guides(&seq_a, coverage, params)?;
+            s.spawn(|_| stream_b = Some(guides(&seq_b, coverage, motion, params)));
+            let stream_a = guides(&seq_a, coverage, motion, params)?;
             pass(&sources[a], params, &seq_a, stream_a, &mut |k, g| split.forward(k, g), &mut |j, out| {
                 tick()?;
                 held.put(j, out);
@@ -265,10 +288,105 @@ impl Held {
     }
 }
 
-/// The guides of the target frames `seq`, in that order.
-fn guides(seq: &[usize], coverage: Coverage<'_>, params: &Params) -> Result<GuideStream> {
+/// The guides of the target frames `seq`, in that order. Their flows are the target's true
+/// motion where `motion` knows it for every step of `seq` ([`true_flows`]), else estimated
+/// from the masks.
+fn guides(seq: &[usize], coverage: Coverage<'_>, motion: Option<Motion<'_>>, params: &Params) -> Result<GuideStream> {
     // A pass's frames are held anyway: keep the flows rather than estimate them twice.
-    GuideStream::builder(params.guide()).keep_flows(true).build(seq.len(), |k| coverage(seq[k]))
+    let builder = GuideStream::builder(params.guide()).keep_flows(true);
+    let builder = match motion.map(|m| true_flows(seq, coverage, m)).transpose()?.flatten() {
+        Some(flows) => builder.flow_source(move |k| Ok(flows[k].plane())),
+        None => builder,
+    };
+    builder.build(seq.len(), |k| coverage(seq[k]))
+}
+
+/// The flows of a pass along `seq` from the target's true motion: frame `seq[k]`'s motion to
+/// `seq[k + 1]` (zero past the last frame, where the pass ends), `None` when a step is not
+/// known. Pixels of the mask with no motion of their own (e.g. a stroke's, when strokes are
+/// painted, or an antialiased rim pixel) take the nearest known one within [`HOLE_REACH`]
+/// pixels, else zero. Each is kept only over its mask's bounding box ([`BoxedFlow`]).
+fn true_flows(seq: &[usize], coverage: Coverage<'_>, motion: Motion<'_>) -> Result<Option<Vec<BoxedFlow>>> {
+    let mut out = Vec::with_capacity(seq.len());
+    for w in seq.windows(2) {
+        let Some(m) = motion(w[0], w[1])? else { return Ok(None) };
+        out.push(BoxedFlow::new(&m, &coverage(w[0])?));
+    }
+    let (w, h) = coverage(seq[0])?.size();
+    out.push(BoxedFlow { size: (w, h), origin: (0, 0), part: Plane::new(0, 0) });
+    Ok(Some(out))
+}
+
+/// A flow that is zero outside a box: the box's part, kept for a pass.
+struct BoxedFlow {
+    size: (usize, usize),
+    origin: (usize, usize),
+    part: Plane<Vec2>,
+}
+
+impl BoxedFlow {
+    /// The motion `m` over the bounding box of the mask of `coverage` (≥ 0.5), holes filled
+    /// ([`fill_holes`]).
+    fn new(m: &Plane<Option<Vec2>>, coverage: &Plane<f32>) -> BoxedFlow {
+        let (w, h) = m.size();
+        let (mut x0, mut y0, mut x1, mut y1) = (w, h, 0, 0);
+        for y in 0..coverage.height().min(h) {
+            for x in 0..coverage.width().min(w) {
+                if coverage.get(x, y) >= 0.5 {
+                    (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x + 1), y1.max(y + 1));
+                }
+            }
+        }
+        if x0 >= x1 {
+            return BoxedFlow { size: (w, h), origin: (0, 0), part: Plane::new(0, 0) };
+        }
+        let part = Plane::par_from_fn(x1 - x0, y1 - y0, |x, y| fill_holes(m, coverage, x0 + x, y0 + y));
+        BoxedFlow { size: (w, h), origin: (x0, y0), part }
+    }
+
+    /// The whole frame's flow.
+    fn plane(&self) -> Plane<Vec2> {
+        let ((x0, y0), (bw, bh)) = (self.origin, self.part.size());
+        Plane::par_from_fn(self.size.0, self.size.1, |x, y| {
+            if x >= x0 && y >= y0 && x < x0 + bw && y < y0 + bh { self.part.get(x - x0, y - y0) } else { Vec2::ZERO }
+        })
+    }
+}
+
+/// How far, pixels, [`fill_holes`] looks for a known motion.
+const HOLE_REACH: usize = 4;
+
+/// The motion at (x, y): `m`'s own inside the mask of `coverage` (≥ 0.5), or else there the
+/// known motion nearest to it (in rings of growing Chebyshev distance, the first found in row
+/// order) within [`HOLE_REACH`] pixels, else zero; zero outside the mask, where flows are not
+/// used.
+fn fill_holes(m: &Plane<Option<Vec2>>, coverage: &Plane<f32>, x: usize, y: usize) -> Vec2 {
+    let (w, h) = m.size();
+    if !coverage.contains(x as isize, y as isize) || coverage.get(x, y) < 0.5 || x >= w || y >= h {
+        return Vec2::ZERO;
+    }
+    if let Some(v) = m.get(x, y) {
+        return v;
+    }
+    for r in 1..=HOLE_REACH as isize {
+        for dy in -r..=r {
+            for dx in -r..=r {
+                if dx.abs() != r && dy.abs() != r {
+                    continue;
+                }
+                let (qx, qy) = (x as isize + dx, y as isize + dy);
+                if qx >= 0
+                    && qy >= 0
+                    && (qx as usize) < w
+                    && (qy as usize) < h
+                    && let Some(v) = m.get(qx as usize, qy as usize)
+                {
+                    return v;
+                }
+            }
+        }
+    }
+    Vec2::ZERO
 }
 
 /// One pass from a keyframe along `seq` (target frame indices; `seq[0]` is the keyframe's),
@@ -538,6 +656,30 @@ mod tests {
         assert_eq!(pass_frames(5, std::iter::empty()), 0);
     }
 
+    /// A true motion kept for a pass: over the mask's bounding box only, the mask's pixels
+    /// without a motion of their own given the nearest known one, zero outside the mask.
+    #[test]
+    fn boxed_flows_fill_the_mask_and_nothing_else() {
+        let coverage =
+            Plane::from_fn(20, 16, |x, y| if (5..12).contains(&x) && (4..9).contains(&y) { 1.0 } else { 0.0 });
+        // Known on the mask but its right column (x = 11), and outside it too.
+        let m = Plane::from_fn(20, 16, |x, _| (x < 11).then(|| Vec2::new(x as f32, 1.0)));
+        let f = BoxedFlow::new(&m, &coverage);
+        assert_eq!((f.origin, f.part.size()), ((5, 4), (7, 5)));
+        let p = f.plane();
+        for y in 0..16 {
+            for x in 0..20 {
+                let want = match coverage.get(x, y) >= 0.5 {
+                    false => Vec2::ZERO,
+                    true if x < 11 => Vec2::new(x as f32, 1.0),
+                    // The nearest known: one to the left.
+                    true => Vec2::new(10.0, 1.0),
+                };
+                assert_eq!(p.get(x, y), want, "({x}, {y})");
+            }
+        }
+    }
+
     #[test]
     fn a_cancelled_paint_stops_with_cancelled() {
         let disc = |k: usize| {
@@ -554,6 +696,7 @@ mod tests {
             &params,
             6,
             &|k| Ok(disc(k)),
+            None,
             &[key],
             &mut |_, _| {
                 emitted += 1;

@@ -321,10 +321,10 @@ impl RegionRenderer for LottieRenderer {
         Ok(RegionFrame { fill, strokes, opacity_in_alpha: true })
     }
 
-    fn fill_motion(&self, region: usize, frame: usize) -> Option<Plane<Option<glam::Vec2>>> {
-        let t = self.model.ip + frame as f32;
+    fn fill_motion(&self, region: usize, from: usize, to: usize) -> Option<Plane<Option<glam::Vec2>>> {
+        let (t, next) = (self.model.ip + from as f32, self.model.ip + to as f32);
         let target = *self.targets.get(region)?;
-        render::fill_motion(&self.model, target, t, t + 1.0, self.width, self.height, self.scale)
+        render::fill_motion(&self.model, target, t, next, self.width, self.height, self.scale)
     }
 }
 

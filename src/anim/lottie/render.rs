@@ -88,6 +88,13 @@ struct Ctx<'a> {
     record: Option<std::cell::RefCell<Vec<FillRecord>>>,
 }
 
+/// Whether two paths are the same shape: the same verbs and points within 1e-3 units.
+fn same_shape(a: &tiny_skia::Path, b: &tiny_skia::Path) -> bool {
+    a.verbs() == b.verbs()
+        && a.points().len() == b.points().len()
+        && a.points().iter().zip(b.points()).all(|(p, q)| (p.x - q.x).abs() <= 1e-3 && (p.y - q.y).abs() <= 1e-3)
+}
+
 /// One fill as the rasterizer would draw it: its path in its own coordinates, the transform
 /// to the canvas and its fill rule.
 struct FillRecord {
@@ -158,8 +165,9 @@ pub fn render(model: &Model, target: Target, time: f32, width: u32, height: u32,
 /// its parents', the enclosing precomps', groups' and repeater copies' — so a point of the
 /// fill at canvas position p at `time` is at `M′·M⁻¹·p` at `next`, M and M′ the fill's
 /// transforms at the two times. Where fills overlap, the top-most one's motion is given.
-/// This is the motion of the fills' coordinates: geometry animated in them (path keyframes,
-/// an ellipse's size, a trim) is not in it. `None` when the two times do not draw the same
+/// That is the whole motion only while each fill keeps its shape in its own coordinates, so
+/// `None` when one does not (path keyframes, an ellipse's size, a trim animate it: the
+/// outline then moves in ways no transform says), when the two times do not draw the same
 /// number of fills (one appears, disappears or fades out entirely), or when there is none.
 pub(crate) fn fill_motion(
     model: &Model,
@@ -183,7 +191,7 @@ pub(crate) fn fill_motion(
         ctx.record.map(|r| r.into_inner())
     };
     let (from, to) = (record(time)?, record(next)?);
-    if from.is_empty() || from.len() != to.len() {
+    if from.is_empty() || from.len() != to.len() || !from.iter().zip(&to).all(|(a, b)| same_shape(&a.path, &b.path)) {
         return None;
     }
     let (w, h) = (width.max(1) as usize, height.max(1) as usize);
