@@ -294,7 +294,7 @@ impl Held {
 fn guides(seq: &[usize], coverage: Coverage<'_>, motion: Option<Motion<'_>>, params: &Params) -> Result<GuideStream> {
     // A pass's frames are held anyway: keep the flows rather than estimate them twice.
     let builder = GuideStream::builder(params.guide()).keep_flows(true);
-    let builder = match motion.map(|m| true_flows(seq, coverage, m)).transpose()?.flatten() {
+    let builder = match motion.map(|m| true_flows(seq, m)).transpose()?.flatten() {
         Some(flows) => builder.flow_source(move |k| Ok(flows[k].plane())),
         None => builder,
     };
@@ -303,17 +303,18 @@ fn guides(seq: &[usize], coverage: Coverage<'_>, motion: Option<Motion<'_>>, par
 
 /// The flows of a pass along `seq` from the target's true motion: frame `seq[k]`'s motion to
 /// `seq[k + 1]` (zero past the last frame, where the pass ends), `None` when a step is not
-/// known. Pixels of the mask with no motion of their own (e.g. a stroke's, when strokes are
-/// painted, or an antialiased rim pixel) take the nearest known one within [`HOLE_REACH`]
-/// pixels, else zero. Each is kept only over its mask's bounding box ([`BoxedFlow`]).
-fn true_flows(seq: &[usize], coverage: Coverage<'_>, motion: Motion<'_>) -> Result<Option<Vec<BoxedFlow>>> {
+/// known (or there is none). Pixels with no motion of their own (e.g. a stroke's, when strokes
+/// are painted, or an antialiased rim pixel) take the nearest known one within [`HOLE_REACH`]
+/// pixels, else zero; the guide stream zeroes it outside the mask. Each is kept only over the
+/// box where it is not zero ([`BoxedFlow`]).
+fn true_flows(seq: &[usize], motion: Motion<'_>) -> Result<Option<Vec<BoxedFlow>>> {
     let mut out = Vec::with_capacity(seq.len());
     for w in seq.windows(2) {
         let Some(m) = motion(w[0], w[1])? else { return Ok(None) };
-        out.push(BoxedFlow::new(&m, &coverage(w[0])?));
+        out.push(BoxedFlow::new(&m));
     }
-    let (w, h) = coverage(seq[0])?.size();
-    out.push(BoxedFlow { size: (w, h), origin: (0, 0), part: Plane::new(0, 0) });
+    let Some(size) = out.last().map(|f| f.size) else { return Ok(None) };
+    out.push(BoxedFlow { size, origin: (0, 0), part: Plane::new(0, 0) });
     Ok(Some(out))
 }
 
@@ -325,14 +326,14 @@ struct BoxedFlow {
 }
 
 impl BoxedFlow {
-    /// The motion `m` over the bounding box of the mask of `coverage` (≥ 0.5), holes filled
-    /// ([`fill_holes`]).
-    fn new(m: &Plane<Option<Vec2>>, coverage: &Plane<f32>) -> BoxedFlow {
+    /// The motion `m` with its holes filled ([`fill_holes`]), over the bounding box of its
+    /// known pixels widened by [`HOLE_REACH`].
+    fn new(m: &Plane<Option<Vec2>>) -> BoxedFlow {
         let (w, h) = m.size();
         let (mut x0, mut y0, mut x1, mut y1) = (w, h, 0, 0);
-        for y in 0..coverage.height().min(h) {
-            for x in 0..coverage.width().min(w) {
-                if coverage.get(x, y) >= 0.5 {
+        for y in 0..h {
+            for x in 0..w {
+                if m.get(x, y).is_some() {
                     (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x + 1), y1.max(y + 1));
                 }
             }
@@ -340,7 +341,9 @@ impl BoxedFlow {
         if x0 >= x1 {
             return BoxedFlow { size: (w, h), origin: (0, 0), part: Plane::new(0, 0) };
         }
-        let part = Plane::par_from_fn(x1 - x0, y1 - y0, |x, y| fill_holes(m, coverage, x0 + x, y0 + y));
+        let (x0, y0) = (x0.saturating_sub(HOLE_REACH), y0.saturating_sub(HOLE_REACH));
+        let (x1, y1) = ((x1 + HOLE_REACH).min(w), (y1 + HOLE_REACH).min(h));
+        let part = Plane::par_from_fn(x1 - x0, y1 - y0, |x, y| fill_holes(m, x0 + x, y0 + y));
         BoxedFlow { size: (w, h), origin: (x0, y0), part }
     }
 
@@ -356,15 +359,10 @@ impl BoxedFlow {
 /// How far, pixels, [`fill_holes`] looks for a known motion.
 const HOLE_REACH: usize = 4;
 
-/// The motion at (x, y): `m`'s own inside the mask of `coverage` (≥ 0.5), or else there the
-/// known motion nearest to it (in rings of growing Chebyshev distance, the first found in row
-/// order) within [`HOLE_REACH`] pixels, else zero; zero outside the mask, where flows are not
-/// used.
-fn fill_holes(m: &Plane<Option<Vec2>>, coverage: &Plane<f32>, x: usize, y: usize) -> Vec2 {
+/// The motion at (x, y): `m`'s own, or else the known motion nearest to it (in rings of growing
+/// Chebyshev distance, the first found in row order) within [`HOLE_REACH`] pixels, else zero.
+fn fill_holes(m: &Plane<Option<Vec2>>, x: usize, y: usize) -> Vec2 {
     let (w, h) = m.size();
-    if !coverage.contains(x as isize, y as isize) || coverage.get(x, y) < 0.5 || x >= w || y >= h {
-        return Vec2::ZERO;
-    }
     if let Some(v) = m.get(x, y) {
         return v;
     }
@@ -656,26 +654,31 @@ mod tests {
         assert_eq!(pass_frames(5, std::iter::empty()), 0);
     }
 
-    /// A true motion kept for a pass: over the mask's bounding box only, the mask's pixels
-    /// without a motion of their own given the nearest known one, zero outside the mask.
+    /// A true motion kept for a pass: its known pixels as they are, each unknown pixel within
+    /// [`HOLE_REACH`] of a known one given the nearest (Chebyshev distance, the first in row
+    /// order among the nearest), zero beyond; kept over the known pixels' box widened by the
+    /// reach.
     #[test]
-    fn boxed_flows_fill_the_mask_and_nothing_else() {
-        let coverage =
-            Plane::from_fn(20, 16, |x, y| if (5..12).contains(&x) && (4..9).contains(&y) { 1.0 } else { 0.0 });
-        // Known on the mask but its right column (x = 11), and outside it too.
-        let m = Plane::from_fn(20, 16, |x, _| (x < 11).then(|| Vec2::new(x as f32, 1.0)));
-        let f = BoxedFlow::new(&m, &coverage);
-        assert_eq!((f.origin, f.part.size()), ((5, 4), (7, 5)));
+    fn boxed_flows_fill_holes_within_reach() {
+        // Known on a block but its right column (x = 11).
+        let known = |x: usize, y: usize| (5..11).contains(&x) && (4..9).contains(&y);
+        let m = Plane::from_fn(20, 16, |x, y| known(x, y).then(|| Vec2::new(x as f32, y as f32)));
+        let f = BoxedFlow::new(&m);
+        assert_eq!((f.origin, f.part.size()), ((1, 0), (14, 13)));
         let p = f.plane();
-        for y in 0..16 {
-            for x in 0..20 {
-                let want = match coverage.get(x, y) >= 0.5 {
-                    false => Vec2::ZERO,
-                    true if x < 11 => Vec2::new(x as f32, 1.0),
-                    // The nearest known: one to the left.
-                    true => Vec2::new(10.0, 1.0),
-                };
-                assert_eq!(p.get(x, y), want, "({x}, {y})");
+        for y in 0..16usize {
+            for x in 0..20usize {
+                // The nearest known pixel, found by scanning them all in row order.
+                let mut best: Option<(usize, Vec2)> = None;
+                for qy in 0..16 {
+                    for qx in 0..20 {
+                        let d = x.abs_diff(qx).max(y.abs_diff(qy));
+                        if known(qx, qy) && d <= HOLE_REACH && best.is_none_or(|(bd, _)| d < bd) {
+                            best = Some((d, Vec2::new(qx as f32, qy as f32)));
+                        }
+                    }
+                }
+                assert_eq!(p.get(x, y), best.map_or(Vec2::ZERO, |b| b.1), "({x}, {y})");
             }
         }
     }
