@@ -297,6 +297,8 @@ pub struct Row {
     pub border_width: f32,
     /// Whether σ or b were lowered to fit the target's thickness.
     pub fitted: bool,
+    /// The most pyramid levels the fit allowed (`None`: the frame size alone decides).
+    pub max_levels: Option<usize>,
     /// Every measure over the whole run (coverage by color, see the module documentation).
     pub summary: Summary,
     /// IoU of the engine's alpha with the target (pooled over frames).
@@ -805,6 +807,7 @@ fn run_job(
             blur_sigma,
             border_width,
             fitted: job.fitted,
+            max_levels: job.params.max_levels(),
             summary: report.summary,
             coverage_alpha: (union > 0).then(|| (inter as f64 / union as f64) as f32),
             exemplar_summary: report.exemplar,

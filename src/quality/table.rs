@@ -51,7 +51,8 @@ fn notes(r: &Row) -> String {
         n.push(format!("a still: incoherent change {v:.4} (no exemplar motion to compare with)"));
     }
     if r.fitted {
-        n.push(format!("fitted to its thickness: σ {}, b {}", r.blur_sigma, r.border_width));
+        let levels = r.max_levels.map(|l| format!(", at most {l} levels")).unwrap_or_default();
+        n.push(format!("fitted to its thickness: σ {}, b {}{levels}", r.blur_sigma, r.border_width));
     }
     n.join("; ")
 }

@@ -405,7 +405,9 @@ impl Synthesizer {
 
     fn level_count(&self, w: usize, h: usize) -> usize {
         let src = &self.source.pyramid;
-        let auto = level_count(w.min(h).min(src.size.0).min(src.size.1)).min(src.levels.len());
+        let auto = level_count(w.min(h).min(src.size.0).min(src.size.1))
+            .min(src.levels.len())
+            .min(self.params.schedule.max_levels.unwrap_or(usize::MAX));
         self.params.schedule.levels.map(|l| l.min(src.levels.len())).unwrap_or(auto).max(1)
     }
 

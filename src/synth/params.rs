@@ -66,6 +66,8 @@ pub(crate) struct Schedule {
     pub opt_iters: Vec<usize>,
     pub optimize_finest: bool,
     pub levels: Option<usize>,
+    /// At most this many levels, whatever the frame size ([`Params::fit_to_thickness`]).
+    pub max_levels: Option<usize>,
 }
 
 impl Default for Schedule {
@@ -81,6 +83,7 @@ impl Default for Schedule {
             opt_iters: vec![4, 2, 1],
             optimize_finest: false,
             levels: None,
+            max_levels: None,
         }
     }
 }
@@ -206,7 +209,9 @@ impl Params {
     /// lies entirely within the border band, so it gets only the exemplar's pale rim texture —
     /// thin limbs, scarves and strokes all but vanish. Here σ ≤ thickness / 2.5 and
     /// b ≤ thickness / 1.5, so a thin part keeps its shape and has an interior of its own; thick
-    /// targets are unchanged. Off when [`ParamsBuilder::fit_thin_layers`] is false.
+    /// targets are unchanged. A part thin enough for b to be lowered also gets no more pyramid
+    /// levels than keep it one patch across ([`Params::max_levels`]). Off when
+    /// [`ParamsBuilder::fit_thin_layers`] is false.
     pub fn fit_to_thickness(&self, thickness: f32, exemplar_border: f32) -> Params {
         let mut p = self.clone();
         if !(self.fit_thin && thickness.is_finite() && thickness > 0.0) {
@@ -224,8 +229,16 @@ impl Params {
         let current = p.border_width.unwrap_or(exemplar_border);
         if b < current {
             p.border_width = Some(b);
+            // A part this thin also loses the pyramid levels too coarse to hold it.
+            p.schedule.max_levels = Some(levels_for_thickness(thickness));
         }
         p
+    }
+
+    /// The most pyramid levels a thin target is synthesized with ([`Params::fit_to_thickness`]);
+    /// `None` = the paper's rule from the frame size alone.
+    pub fn max_levels(&self) -> Option<usize> {
+        self.schedule.max_levels
     }
 
     /// Exemplar scale, when set explicitly (else the exemplar's recommendation).
@@ -779,6 +792,17 @@ impl ParamsBuilder {
     }
 }
 
+/// The most pyramid levels that a target `thickness` pixels thick (its inscribed radius) is
+/// synthesized with: the paper's rule ⌊log2(d_min / n)⌋ (§3.6) keeps the frame at least two
+/// patches across at the coarsest level; a part of the target must stay at least one patch
+/// across there, `2·thickness / 2^(L−1) ≥ n`. A coarser level would see the whole part, both
+/// of its edges at once, in one patch, and match it to the exemplar's thinnest features only —
+/// the pale wet lobes of its advancing front — which the finer levels then inherit.
+pub(crate) fn levels_for_thickness(thickness: f32) -> usize {
+    let across = 2.0 * thickness / PATCH as f32;
+    if across.is_finite() && across >= 1.0 { 1 + across.log2().floor() as usize } else { 1 }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -794,6 +818,11 @@ mod tests {
         assert_eq!(blurred.guide().blur_sigma, 3.0);
         assert_eq!(thin.border_width(), Some(5.0));
         assert!(thin.fit_to_thickness(7.5, 12.0) == thin);
+        // 15 px across, three patches: at the third level it would be under one.
+        assert_eq!(thin.max_levels(), Some(2));
+        assert_eq!(p.fit_to_thickness(60.0, 12.0).max_levels(), None, "thick: the frame decides");
+        assert_eq!((levels_for_thickness(2.4), levels_for_thickness(2.5), levels_for_thickness(5.0)), (1, 1, 2));
+        assert_eq!(levels_for_thickness(f32::NAN), 1);
         // Switched off, or a target of unknown thickness: unchanged.
         let off = Params::builder().fit_thin_layers(false).build().unwrap();
         assert_eq!(off.fit_to_thickness(7.5, 12.0), off);
