@@ -93,6 +93,8 @@ fn stand_ins_score_what_they_are() {
         "{:?}",
         id.summary.incoherent_change_ratio
     );
+    let at_depths = id.summary.incoherent_change_ratio_depth.unwrap();
+    assert!((at_depths - 1.0).abs() < 1e-3, "its own depths: {at_depths}");
     assert_eq!(id.coverage_alpha, Some(1.0));
     assert!(id.summary.coverage_iou.unwrap() > 0.95, "{:?}", id.summary.coverage_iou);
     assert!(id.exemplar_summary.edge_darkening.unwrap() > 0.05, "ink-rims has dark rims");

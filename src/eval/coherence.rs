@@ -1,7 +1,8 @@
 //! Incoherent change: how much the paint changes between consecutive frames in ways its own
 //! motion does not explain — boiling, as opposed to paint that flows.
 
-use super::{FarnebackParams, Measure, Shape, farneback_flow, warp_bilinear};
+use super::depth::{DEPTH_BINS, depth_bin};
+use super::{FarnebackParams, Mean, Measure, Shape, farneback_flow, warp_bilinear};
 use crate::img::{Mask, Plane};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -41,31 +42,55 @@ pub fn flow_residual(prev: &Plane<f32>, next: &Plane<f32>, region: &Mask, params
 }
 
 fn residual_sum(prev: &Plane<f32>, next: &Plane<f32>, region: &Mask, params: &FarnebackParams) -> (f64, u64) {
+    let bins = residual_bins(prev, next, region, params, 1, |_| 0);
+    bins.first().map_or((0.0, 0), |m| (m.sum(), m.count()))
+}
+
+/// [`flow_residual`]'s sums per bin: the residual of every pixel of `region` (row-major
+/// index) pooled into bin `bin(index)` of `n` (indices past the last go to the last).
+fn residual_bins(
+    prev: &Plane<f32>,
+    next: &Plane<f32>,
+    region: &Mask,
+    params: &FarnebackParams,
+    n: usize,
+    bin: impl Fn(usize) -> usize,
+) -> Vec<Mean> {
+    let mut bins = vec![Mean::default(); n.max(1)];
     if region.data().iter().all(|&b| !b) {
-        return (0.0, 0);
+        return bins;
     }
     let flow = farneback_flow(next, prev, params);
     let warped = warp_bilinear(prev, &flow);
-    let (mut sum, mut n) = (0f64, 0u64);
-    for ((&a, &b), &inside) in next.data().iter().zip(warped.data()).zip(region.data()) {
+    let last = bins.len() - 1;
+    for (k, ((&a, &b), &inside)) in next.data().iter().zip(warped.data()).zip(region.data()).enumerate() {
         if inside {
-            sum += (a - b).abs() as f64;
-            n += 1;
+            bins[bin(k).min(last)].add((a - b).abs() as f64);
         }
     }
-    (sum, n)
+    bins
 }
 
-/// The [`flow_residual`] of one pair of frames over their [`coherence_region`], and the
-/// number of pixels behind it.
+/// One pair of frames' [`flow_residual`] over their [`coherence_region`]: its value, the
+/// pixels behind it, and its sums per depth bin ([`depth_bin`] of the smaller of the two
+/// frames' distances from the edge).
+pub(crate) struct PairResidual {
+    pub value: Option<f32>,
+    pub pixels: u64,
+    pub bins: Vec<Mean>,
+}
+
+/// The [`PairResidual`] of one pair of frames.
 pub(crate) fn pair_residual(
     prev: (&Plane<f32>, &Shape),
     next: (&Plane<f32>, &Shape),
     params: &CoherenceParams,
-) -> (Option<f32>, u64) {
+) -> PairResidual {
     let region = coherence_region(prev.1, next.1, params.margin);
-    let (sum, n) = residual_sum(prev.0, next.0, &region, &params.flow);
-    ((n > 0).then(|| (sum / n as f64) as f32), n)
+    let (a, b) = (prev.1.sdf.data(), next.1.sdf.data());
+    let bins = residual_bins(prev.0, next.0, &region, &params.flow, DEPTH_BINS, |k| depth_bin(a[k].min(b[k])));
+    let all = bins.iter().fold(Mean::default(), |a, &b| a.merged(b));
+    PairResidual { value: all.value(), pixels: all.count(), bins }
 }
 
 /// Incoherent change of a sequence of luma planes: for each pair of consecutive frames
@@ -77,16 +102,28 @@ pub(crate) fn pair_residual(
 /// the exemplar's paint, ≫ 1 boils; the exemplar's frames in a shuffled order score several
 /// times their ordered value.
 pub fn incoherent_change(lumas: &[Plane<f32>], shapes: &[Shape], params: &CoherenceParams) -> Measure {
+    incoherent_change_binned(lumas, shapes, params).0
+}
+
+/// [`incoherent_change`], and its residuals pooled over all pairs per depth bin (see
+/// [`PairResidual`]).
+pub(crate) fn incoherent_change_binned(
+    lumas: &[Plane<f32>],
+    shapes: &[Shape],
+    params: &CoherenceParams,
+) -> (Measure, Vec<Mean>) {
     let n = lumas.len().min(shapes.len());
-    let pairs: Vec<(Option<f32>, u64)> = (0..n)
+    let pairs: Vec<Option<PairResidual>> = (0..n)
         .into_par_iter()
-        .map(|i| {
-            if i == 0 {
-                return (None, 0);
-            }
-            pair_residual((&lumas[i - 1], &shapes[i - 1]), (&lumas[i], &shapes[i]), params)
-        })
+        .map(|i| (i > 0).then(|| pair_residual((&lumas[i - 1], &shapes[i - 1]), (&lumas[i], &shapes[i]), params)))
         .collect();
-    let samples = pairs.iter().map(|p| p.1).sum();
-    Measure { samples, ..Measure::from_frame_values(pairs.into_iter().map(|p| p.0).collect()) }
+    let mut bins = vec![Mean::default(); DEPTH_BINS];
+    for p in pairs.iter().flatten() {
+        for (a, &b) in bins.iter_mut().zip(&p.bins) {
+            *a = a.merged(b);
+        }
+    }
+    let samples = pairs.iter().flatten().map(|p| p.pixels).sum();
+    let values = pairs.iter().map(|p| p.as_ref().and_then(|p| p.value)).collect();
+    (Measure { samples, ..Measure::from_frame_values(values) }, bins)
 }

@@ -45,11 +45,31 @@ pub(crate) struct DepthProfile {
     hist: Vec<ColorHistogram>,
     /// The bin that stands for each bin (itself when it has enough pixels).
     stand_in: Vec<Option<usize>>,
+    /// The exemplar's flow residual ([`super::incoherent_change`]) pooled per depth bin, and
+    /// the bin that stands for each bin.
+    coherence: Vec<Mean>,
+    coherence_stand_in: Vec<Option<usize>>,
+}
+
+/// The bin that stands for each bin: itself where it has samples (`has`); beyond the deepest
+/// bin with samples, the deepest with at least [`MIN_BIN_PIXELS`] (`enough`, or else the
+/// deepest); a gap within, the nearest shallower bin with samples (or deeper).
+fn stand_ins(has: impl Fn(usize) -> bool, enough: impl Fn(usize) -> bool) -> Vec<Option<usize>> {
+    let deepest = (0..DEPTH_BINS).rev().find(|&j| has(j));
+    let tail = (0..DEPTH_BINS).rev().find(|&j| enough(j)).or(deepest);
+    (0..DEPTH_BINS)
+        .map(|k| match deepest {
+            Some(d) if k > d => tail,
+            _ if has(k) => Some(k),
+            _ => (0..k).rev().find(|&j| has(j)).or_else(|| (k..DEPTH_BINS).find(|&j| has(j))),
+        })
+        .collect()
 }
 
 impl DepthProfile {
-    /// Profiles the exemplar's `frames` over `regions` (interiors of `shapes`).
-    pub(crate) fn new(frames: &[Plane<Rgb>], shapes: &[Shape], regions: &[Mask]) -> DepthProfile {
+    /// Profiles the exemplar's `frames` over `regions` (interiors of `shapes`); `coherence`
+    /// is its flow residual per depth bin ([`super::coherence::incoherent_change_binned`]).
+    pub(crate) fn new(frames: &[Plane<Rgb>], shapes: &[Shape], regions: &[Mask], coherence: &[Mean]) -> DepthProfile {
         let mut contrast = vec![Mean::default(); DEPTH_BINS];
         let mut hist = vec![ColorHistogram::new(); DEPTH_BINS];
         for ((f, s), r) in frames.iter().zip(shapes).zip(regions) {
@@ -68,16 +88,10 @@ impl DepthProfile {
         // Beyond the exemplar's deepest pixels: its deepest well-sampled bin (or, if none
         // is, its deepest bin); within its depths each bin stands for itself (an output of the
         // exemplar's own shapes is then measured against exactly the exemplar).
-        let deepest = (0..DEPTH_BINS).rev().find(|&j| has(j));
-        let tail = (0..DEPTH_BINS).rev().find(|&j| enough(j)).or(deepest);
-        let stand_in = (0..DEPTH_BINS)
-            .map(|k| match deepest {
-                Some(d) if k > d => tail,
-                _ if has(k) => Some(k),
-                _ => (0..k).rev().find(|&j| has(j)).or_else(|| (k..DEPTH_BINS).find(|&j| has(j))),
-            })
-            .collect();
-        DepthProfile { contrast, hist, stand_in }
+        let stand_in = stand_ins(has, enough);
+        let coherence = coherence.to_vec();
+        let coherence_stand_in = stand_ins(|k| coherence[k].count() > 0, |k| coherence[k].count() >= MIN_BIN_PIXELS);
+        DepthProfile { contrast, hist, stand_in, coherence, coherence_stand_in }
     }
 
     /// The exemplar's contrast and colors over its whole interior, whatever the depths (the
@@ -103,6 +117,24 @@ impl DepthProfile {
         (n > 0.0).then(|| (sum / n) as f32)
     }
 
+    /// How much more the exemplar's paint changes at the depths of `counts` (the output's
+    /// flow-residual pixels per bin) than over its own: the exemplar's pooled residual at
+    /// those depths ÷ over all of its own pixels. The exemplar's incoherent change times this
+    /// is what an output that changed like the exemplar at each of its depths would score;
+    /// exactly 1 for the exemplar's own depths.
+    pub(crate) fn coherence_factor(&self, counts: &[u64]) -> Option<f32> {
+        let own = self.coherence.iter().fold(Mean::default(), |a, &b| a.merged(b)).value()?;
+        let (mut sum, mut n) = (0f64, 0f64);
+        for (k, &c) in counts.iter().enumerate() {
+            let Some(j) = self.coherence_stand_in[k] else { continue };
+            if let (Some(v), true) = (self.coherence[j].value(), c > 0) {
+                sum += c as f64 * v as f64;
+                n += c as f64;
+            }
+        }
+        (n > 0.0 && own > 0.0).then(|| (sum / n / own as f64) as f32)
+    }
+
     /// Per-channel Wasserstein distance of `out` to the exemplar's colors mixed at the depths
     /// of `counts` (the output's pixels per bin).
     pub(crate) fn palette(&self, out: &ColorHistogram, counts: &[u64]) -> Option<[f32; 3]> {
@@ -116,5 +148,53 @@ impl DepthProfile {
             }
         }
         out.wasserstein_mixture(&parts)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn mean(v: f64, n: u64) -> Mean {
+        let mut m = Mean::default();
+        for _ in 0..n {
+            m.add(v);
+        }
+        m
+    }
+
+    /// The exemplar's residual at the output's depths over its own: a paint that changes
+    /// three times as fast 4–6 px inside as 20–22 px inside.
+    #[test]
+    fn coherence_factor_weighs_the_exemplar_by_the_output_depths() {
+        let mut coherence = vec![Mean::default(); DEPTH_BINS];
+        coherence[2] = mean(0.03, 1000);
+        coherence[10] = mean(0.01, 3000);
+        let has = |k: usize| coherence[k].count() > 0;
+        let p = DepthProfile {
+            contrast: vec![Mean::default(); DEPTH_BINS],
+            hist: vec![ColorHistogram::new(); DEPTH_BINS],
+            stand_in: vec![None; DEPTH_BINS],
+            coherence_stand_in: stand_ins(has, |k| coherence[k].count() >= MIN_BIN_PIXELS),
+            coherence: coherence.clone(),
+        };
+        let own = (30.0 + 30.0) / 4000.0;
+        let at = |pairs: &[(usize, u64)]| {
+            let mut counts = vec![0u64; DEPTH_BINS];
+            for &(k, n) in pairs {
+                counts[k] = n;
+            }
+            p.coherence_factor(&counts).unwrap()
+        };
+        let close = |a: f32, b: f64| (a as f64 - b).abs() < 1e-5;
+        // The exemplar's own depths: 1, whatever the scale of the counts.
+        assert!(close(at(&[(2, 10), (10, 30)]), 1.0), "{}", at(&[(2, 10), (10, 30)]));
+        // All near the edge (a thin part), and all deeper than the exemplar reaches (its
+        // deepest bin stands in), and a gap between them (the nearest shallower bin).
+        assert!(close(at(&[(2, 5)]), 0.03 / own));
+        assert!(close(at(&[(30, 5)]), 0.01 / own));
+        assert!(close(at(&[(6, 1), (10, 1)]), 0.03 / own / 2.0 + 0.01 / own / 2.0));
+        // Nothing measured: no factor.
+        assert_eq!(p.coherence_factor(&[0; DEPTH_BINS]), None);
     }
 }

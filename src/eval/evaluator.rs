@@ -1,7 +1,7 @@
 //! The evaluation itself: the exemplar's side prepared once ([`Reference`]), output frames
 //! measured batch by batch ([`Evaluator`]), and [`evaluate`] doing both for a whole sequence.
 
-use super::coherence::pair_residual;
+use super::coherence::{incoherent_change_binned, pair_residual};
 use super::contrast::local_contrast_binned;
 use super::coverage::coverage_from_counts;
 use super::depth::{DEPTH_BINS, DepthProfile, depth_bin, region_bins};
@@ -10,8 +10,8 @@ use super::patches::frame_patch_mean;
 use super::temporal::frame_change_mean;
 use super::{
     ColorHistogram, EvalOptions, ExemplarSummary, FrameStats, Mean, Measure, Painted, PatchIndex, Report, Shape,
-    Summary, check, composite_output, detect_painted, edge_darkening, edge_darkening_seq, incoherent_change,
-    intersection_union, luma_plane, motion_agreement, painted_mask, ratio, stationary_interior, temporal_change, timed,
+    Summary, check, composite_output, detect_painted, edge_darkening, edge_darkening_seq, intersection_union,
+    luma_plane, motion_agreement, painted_mask, ratio, stationary_interior, temporal_change, timed,
 };
 use crate::error::{Error, Result};
 use crate::exemplar::Exemplar;
@@ -74,9 +74,10 @@ impl Reference {
         let temporal = timed("exemplar temporal change", || temporal_change(&frames, &shapes, &options.temporal));
         let motion = timed("exemplar motion", || motion_agreement(&lumas, &shapes, &options.motion));
         let rim = timed("exemplar edge darkening", || edge_darkening_seq(&frames, &shapes, &options.rim));
-        let coherence = timed("exemplar incoherent change", || incoherent_change(&lumas, &shapes, &options.coherence));
+        let (coherence, coherence_bins) =
+            timed("exemplar incoherent change", || incoherent_change_binned(&lumas, &shapes, &options.coherence));
         // Contrast and colors per depth, and over the whole interior from the same pass.
-        let depth = timed("exemplar depth profile", || DepthProfile::new(&frames, &shapes, &regions));
+        let depth = timed("exemplar depth profile", || DepthProfile::new(&frames, &shapes, &regions, &coherence_bins));
         let (contrast, hist) = depth.whole();
         let contrast = contrast.value();
         Ok(Reference {
@@ -152,6 +153,8 @@ struct FrameTotals {
     motion: Mean,
     rim: Option<f32>,
     coherence: (Option<f32>, u64),
+    /// The flow residual's pixels per depth bin.
+    coherence_bins: Vec<u64>,
 }
 
 impl FrameTotals {
@@ -242,17 +245,20 @@ impl<'a> Evaluator<'a> {
                 } else {
                     prev.map(|p| (&p.rgb, &p.luma, &p.shape))
                 };
-                let (temporal, motion, coherence) = match before {
+                let (temporal, motion, pair) = match before {
                     Some((prgb, pluma, pshape)) => {
                         let still = stationary_interior(pshape, shape, &o.temporal);
                         (
                             frame_change_mean(prgb, &rgb[i], &still),
                             motion_pair_mean((pluma, pshape), (&lumas[i], shape), &o.motion),
-                            pair_residual((pluma, pshape), (&lumas[i], shape), &o.coherence),
+                            Some(pair_residual((pluma, pshape), (&lumas[i], shape), &o.coherence)),
                         )
                     }
-                    None => (Mean::default(), Mean::default(), (None, 0)),
+                    None => (Mean::default(), Mean::default(), None),
                 };
+                let coherence = pair.as_ref().map_or((None, 0), |p| (p.value, p.pixels));
+                let coherence_bins =
+                    pair.map_or_else(|| vec![0; DEPTH_BINS], |p| p.bins.iter().map(|b| b.count()).collect());
                 let contrast_bins =
                     local_contrast_binned(&rgb[i], &region, DEPTH_BINS, |x, y| depth_bin(shape.sdf.get(x, y)));
                 FrameTotals {
@@ -272,6 +278,7 @@ impl<'a> Evaluator<'a> {
                     motion,
                     rim: edge_darkening(&rgb[i], shape, &o.rim),
                     coherence,
+                    coherence_bins,
                 }
             })
             .collect();
@@ -305,13 +312,17 @@ impl<'a> Evaluator<'a> {
         let mut hist = ColorHistogram::new();
         let mut contrast_bins = vec![Mean::default(); DEPTH_BINS];
         let mut counts = vec![0u64; DEPTH_BINS];
+        let mut coherence_counts = vec![0u64; DEPTH_BINS];
         for t in frames {
             hist.merge(&t.hist);
             for k in 0..DEPTH_BINS {
                 contrast_bins[k] = contrast_bins[k].merged(t.contrast_bins[k]);
                 counts[k] += t.region_bins[k];
+                coherence_counts[k] += t.coherence_bins[k];
             }
         }
+        // The exemplar's incoherent change at the output's depths.
+        let coherence_at = |counts: &[u64]| Some(r.coherence.value? * r.depth.coherence_factor(counts)?);
         let palette = r.depth.palette(&hist, &counts);
         let palette_whole = hist.wasserstein(&r.hist);
         let per_frame = frames
@@ -331,6 +342,7 @@ impl<'a> Evaluator<'a> {
                 edge_darkening_ratio: ratio(t.rim, r.rim.value),
                 incoherent_change: t.coherence.0,
                 incoherent_change_ratio: ratio(t.coherence.0, r.coherence.value),
+                incoherent_change_ratio_depth: ratio(t.coherence.0, coherence_at(&t.coherence_bins)),
             })
             .collect();
         let summary = Summary {
@@ -349,6 +361,7 @@ impl<'a> Evaluator<'a> {
             edge_darkening_ratio: ratio(rim.value, r.rim.value),
             incoherent_change: coherence.value,
             incoherent_change_ratio: ratio(coherence.value, r.coherence.value),
+            incoherent_change_ratio_depth: ratio(coherence.value, coherence_at(&coherence_counts)),
             interior_pixels: hist.len(),
             patch_samples: patches.samples,
             temporal_pixels: temporal.samples,

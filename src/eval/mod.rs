@@ -164,6 +164,10 @@ impl Mean {
     pub(crate) fn count(&self) -> u64 {
         self.count
     }
+
+    pub(crate) fn sum(&self) -> f64 {
+        self.sum
+    }
 }
 
 /// Settings of [`evaluate`]: `EvalOptions::default().interior_margin(3.0).background(paper)`.

@@ -390,6 +390,7 @@ mod tests {
                 edge_darkening_ratio: None,
                 incoherent_change: None,
                 incoherent_change_ratio: None,
+                incoherent_change_ratio_depth: None,
                 interior_pixels: 0,
                 patch_samples: 0,
                 temporal_pixels: 0,
@@ -412,6 +413,7 @@ mod tests {
                     edge_darkening_ratio: series(i).map(|v| 1.0 - v),
                     incoherent_change: series(i),
                     incoherent_change_ratio: series(i),
+                    incoherent_change_ratio_depth: series(i),
                 })
                 .collect(),
             options: Default::default(),

@@ -88,6 +88,14 @@ pub struct Summary {
     /// `incoherent_change` / the exemplar's: ≈ 1 changes like the exemplar, ≫ 1 boils.
     #[serde(default)]
     pub incoherent_change_ratio: Option<f32>,
+    /// `incoherent_change` / the exemplar's at the same depths: what the exemplar's paint
+    /// would score with the output's mix of distances from the edge (its own residual per 2-px
+    /// depth bin, weighted by the output's residual pixels per bin). The exemplar's paint
+    /// changes most near its advancing edge (1.5–2.7× its mean 5–7 px inside, on the bundled
+    /// exemplars) and least deep inside, so a thin part scores lower here than in
+    /// `incoherent_change_ratio` and a large interior higher.
+    #[serde(default)]
+    pub incoherent_change_ratio_depth: Option<f32>,
     /// Interior pixels over all frames (behind contrast and palette).
     pub interior_pixels: u64,
     /// Output patches sampled for `patch_nn_distance`.
@@ -138,6 +146,10 @@ pub struct FrameStats {
     /// `incoherent_change` / the exemplar's (mean over its pairs).
     #[serde(default)]
     pub incoherent_change_ratio: Option<f32>,
+    /// `incoherent_change` / the exemplar's at this frame's depths (see
+    /// [`Summary::incoherent_change_ratio_depth`]).
+    #[serde(default)]
+    pub incoherent_change_ratio_depth: Option<f32>,
 }
 
 /// Everything [`super::evaluate`] measured.
@@ -290,6 +302,14 @@ impl fmt::Display for Report {
             num(e.incoherent_change),
             num(s.incoherent_change_ratio),
             "ratio ~1; >>1 boiling",
+        )?;
+        row(
+            f,
+            "  at the output's depths",
+            String::new(),
+            num(s.incoherent_change.zip(s.incoherent_change_ratio_depth).map(|(v, r)| v / r)),
+            num(s.incoherent_change_ratio_depth),
+            "the exemplar's change at the same distances from the edge",
         )?;
         row(
             f,

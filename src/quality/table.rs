@@ -11,8 +11,10 @@ fn num(v: Option<f32>, digits: usize) -> String {
     }
 }
 
-const HEADER: [&str; 11] =
-    ["exemplar", "target", "frames", "IoU", "IoU α", "contrast", "rim", "palette", "t.change", "incoh.", "motion"];
+const HEADER: [&str; 12] = [
+    "exemplar", "target", "frames", "IoU", "IoU α", "contrast", "rim", "palette", "t.change", "incoh.", "incoh.d",
+    "motion",
+];
 
 fn line(f: &mut fmt::Formatter<'_>, cells: &[String], notes: &str) -> fmt::Result {
     write!(f, "{:<16} {:<13} {:>6}", cells[0], cells[1], cells[2])?;
@@ -34,6 +36,7 @@ fn cells(exemplar: &str, target: &str, frames: usize, s: &Summary, alpha: Option
         num(s.palette_distance_mean, 4),
         num(s.temporal_change_ratio, 2),
         num(s.incoherent_change_ratio, 2),
+        num(s.incoherent_change_ratio_depth, 2),
         num(s.motion_agreement, 2),
     ]
 }
@@ -74,7 +77,8 @@ impl fmt::Display for SuiteReport {
             f,
             "contrast, rim (edge darkening), t.change (temporal change), incoh. (incoherent change): output / exemplar, \
              1 = like the exemplar; palette: W1 distance, 0 = the exemplar's colors (contrast and palette against the exemplar \
-             at the same distances from the edge); motion: mean cosine with the target's motion"
+             at the same distances from the edge); incoh.d: incoherent change against the exemplar's at the same distances from \
+             the edge (its paint changes most near its advancing edge); motion: mean cosine with the target's motion"
         )?;
         writeln!(f)?;
         line(f, &HEADER.map(String::from), "notes")?;
