@@ -341,8 +341,9 @@ fn exponential_precomp_reuse_is_refused_before_drawing() {
 /// here a square whose layer slides right 1 px a frame while its group turns 9° a frame about
 /// the square's center. Every covered pixel's motion is the composed step `M′·M⁻¹·p − p`,
 /// including the tangential part a mask cannot show (the turn moves the corners by up to
-/// 1.5 px a frame though the square's outline hardly changes). A fill whose own shape is
-/// animated, or that fades out, leaves no motion to give, nor does the last frame.
+/// 1.5 px a frame though the square's outline hardly changes). A fill whose own outline is
+/// animated moves with it point by point; one that fades out leaves no motion to give, nor
+/// does the last frame.
 #[test]
 fn fill_motion_is_the_transforms_step() {
     let mut l = rect_layer("turning", 1, 10.0, 10.0, 10.0, 10.0, [1.0, 1.0, 1.0, 1.0]);
@@ -378,13 +379,44 @@ fn fill_motion_is_the_transforms_step() {
     assert!(a.fill_motion(0, 9).unwrap().is_none(), "the last frame has no next");
     assert!(a.fill_motion(3, 0).is_err(), "no region 3");
 
-    // A square that grows in its own coordinates (its size keyed): its outline moves in a way
-    // no transform says, so no motion is given.
+    // A square that grows in its own coordinates (its size keyed 10 → 20 px over 10 frames,
+    // about its center (15, 15)): its outline scales, and so does every point inside, exactly.
     let mut l = rect_layer("growing", 1, 10.0, 10.0, 10.0, 10.0, [1.0, 1.0, 1.0, 1.0]);
     l["shapes"][0]["it"][0]["s"] = json!({"a": 1, "k": [
         {"t": 0, "s": [10, 10], "i": linear, "o": start}, {"t": 10, "s": [20, 20]}]});
     let a = anim_of(&doc(vec![l]), &LoadOptions::default());
-    assert!(a.fill_motion(0, 4).unwrap().is_none());
+    let v = a.fill_motion(0, 4).unwrap().expect("a keyed size moves the same points");
+    let c = glam::Vec2::new(15.0, 15.0);
+    let mut covered = 0;
+    for (k, m) in v.data().iter().enumerate() {
+        let Some(m) = m else { continue };
+        covered += 1;
+        let p = glam::Vec2::new((k % 40) as f32 + 0.5, (k / 40) as f32 + 0.5);
+        let want = c + (p - c) * (15.0 / 14.0) - p;
+        assert!((*m - want).length() < 1e-3, "{p}: {m} against {want}");
+    }
+    assert_eq!(covered, 14 * 14);
+
+    // A path whose keyframes move one vertex of a quadrilateral (path keyframes interpolate
+    // vertex by vertex): near that vertex the paint moves nearly with it (measured 0.86 of
+    // its step at 3.5 px from it), at the opposite one hardly at all (0.004 px).
+    let path = |v: Value| json!({"c": true, "v": v, "i": [[0, 0], [0, 0], [0, 0], [0, 0]], "o": [[0, 0], [0, 0], [0, 0], [0, 0]]});
+    let quad = |corner: [f64; 2]| path(json!([[5, 5], [35, 5], corner, [5, 35]]));
+    let layer = json!({"ty": 4, "nm": "bending", "ind": 1, "ip": 0, "op": 10, "st": 0, "ks": {},
+        "shapes": [{"ty": "gr", "it": [
+            {"ty": "sh", "ks": {"a": 1, "k": [{"t": 0, "s": [quad([35.0, 35.0])], "i": linear, "o": start},
+                                              {"t": 10, "s": [quad([25.0, 25.0])]}]}},
+            {"ty": "fl", "c": st(json!([1, 1, 1, 1])), "o": st(json!(100)), "r": 1},
+            {"ty": "tr", "p": st(json!([0, 0])), "a": st(json!([0, 0])), "s": st(json!([100, 100])),
+             "r": st(json!(0)), "o": st(json!(100))}]}]});
+    let a = anim_of(&doc(vec![layer]), &LoadOptions::default());
+    let v = a.fill_motion(0, 2).unwrap().expect("a keyed path with the same vertices");
+    // The corner moves (−1, −1) a frame.
+    let near = v.get(31, 31).expect("inside, near the moving corner");
+    let far = v.get(6, 6).expect("inside, at the still corner");
+    println!("near the moving corner {near}, at the still one {far}");
+    assert!((near - glam::Vec2::new(-1.0, -1.0)).length() < 0.35, "{near}");
+    assert!(far.length() < 0.2, "{far}");
 
     // Fading out at frame 6: the fills of frames 5 and 6 differ, so no motion is given there.
     let mut l = rect_layer("fading", 1, 10.0, 10.0, 10.0, 10.0, [1.0, 1.0, 1.0, 1.0]);

@@ -272,11 +272,14 @@ impl Animation {
     /// A Lottie file draws each fill in its own coordinates under a chain of transforms
     /// (layer, parents, precomps, groups, repeater copies), so a point of a fill moves by
     /// `M′·M⁻¹`, M and M′ the chain at the two frames: the whole motion, where a mask shows
-    /// only its normal part (a turning disc looks still). That holds while every fill keeps its
-    /// shape in its own coordinates: `Ok(None)` when one does not (path keyframes, an ellipse's
-    /// size, a trim — a waving outline moves in ways no transform says), for SVG sequences, at
-    /// the last frame, and when the two frames do not draw the same fills (one appears or fades
-    /// out entirely).
+    /// only its normal part (a turning disc looks still). A fill whose outline is animated in
+    /// its own coordinates but keeps its vertices (path keyframes, an ellipse's or rectangle's
+    /// keyed size) moves with its outline point by point: the best affine map of the
+    /// outline's samples, plus their remaining motion spread inside (exact where the outline
+    /// only scales or shears, an estimate inside one that bends). `Ok(None)` where an outline
+    /// changes its structure (a trim, another vertex count), for SVG sequences, at the last
+    /// frame, and when the two frames do not draw the same fills (one appears or fades out
+    /// entirely).
     pub fn fill_motion(&self, region: usize, frame: usize) -> Result<Option<Plane<Option<glam::Vec2>>>> {
         self.check(region, frame)?;
         if frame + 1 == self.frames {

@@ -165,10 +165,15 @@ pub fn render(model: &Model, target: Target, time: f32, width: u32, height: u32,
 /// its parents', the enclosing precomps', groups' and repeater copies' — so a point of the
 /// fill at canvas position p at `time` is at `M′·M⁻¹·p` at `next`, M and M′ the fill's
 /// transforms at the two times. Where fills overlap, the top-most one's motion is given.
-/// That is the whole motion only while each fill keeps its shape in its own coordinates, so
-/// `None` when one does not (path keyframes, an ellipse's size, a trim animate it: the
-/// outline then moves in ways no transform says), when the two times do not draw the same
-/// number of fills (one appears, disappears or fades out entirely), or when there is none.
+/// A fill whose outline changes in its own coordinates but keeps its structure (path
+/// keyframes, which interpolate vertex by vertex; an ellipse's or a rectangle's keyed size)
+/// moves its outline point by point: sampled along each segment at the same curve parameters
+/// at both times, the best affine map of the samples (least squares) plus each sample's
+/// remaining motion, spread inside by inverse squared distance ([`PointMap`]) — exact for an
+/// outline that only scales or shears, an estimate inside one that bends. `None` when a
+/// fill's outline changes its structure (a trim, a path of another vertex count), when the
+/// two times do not draw the same number of fills (one appears, disappears or fades out
+/// entirely), or when there is none.
 pub(crate) fn fill_motion(
     model: &Model,
     target: Target,
@@ -191,26 +196,33 @@ pub(crate) fn fill_motion(
         ctx.record.map(|r| r.into_inner())
     };
     let (from, to) = (record(time)?, record(next)?);
-    if from.is_empty() || from.len() != to.len() || !from.iter().zip(&to).all(|(a, b)| same_shape(&a.path, &b.path)) {
+    if from.is_empty() || from.len() != to.len() {
         return None;
     }
+    // Each fill's point map from `time` to `next`, canvas to canvas.
+    let singular = |a: &FillRecord| {
+        let det = a.m.matrix2.determinant();
+        !det.is_finite() || det.abs() < 1e-12
+    };
+    // A fill with a singular transform draws nothing and is skipped.
+    let maps: Vec<Option<PointMap>> = from
+        .iter()
+        .zip(&to)
+        .map(|(a, b)| if singular(a) { Ok(None) } else { PointMap::new(a, b).map(Some).ok_or(()) })
+        .collect::<Result<_, ()>>()
+        .ok()?;
     let (w, h) = (width.max(1) as usize, height.max(1) as usize);
     let mut out = crate::img::Plane::new(w, h);
     let mut cover = Mask::new(w as u32, h as u32)?;
     // Bottom-most first: a fill drawn later covers the ones before it.
-    for (a, b) in from.iter().zip(&to) {
-        let det = a.m.matrix2.determinant();
-        let Some(ts) = to_ts(&a.m) else { continue };
-        if !det.is_finite() || det.abs() < 1e-12 {
-            continue;
-        }
-        let step = b.m * a.m.inverse();
+    for (a, map) in from.iter().zip(&maps) {
+        let (Some(ts), Some(map)) = (to_ts(&a.m), map) else { continue };
         cover.clear();
         cover.fill_path(&a.path, a.rule, false, ts);
         for (k, &c) in cover.data().iter().enumerate() {
             if c > 127 {
                 let p = Vec2::new((k % w) as f32 + 0.5, (k / w) as f32 + 0.5);
-                let v = step.transform_point2(p) - p;
+                let v = map.apply(p) - p;
                 if v.is_finite() {
                     out.data_mut()[k] = Some(v);
                 }
@@ -218,6 +230,128 @@ pub(crate) fn fill_motion(
         }
     }
     Some(out)
+}
+
+/// Where a fill's points go from one time to another, on the canvas.
+enum PointMap {
+    /// The fill keeps its shape: the step of its transforms, `M′·M⁻¹`.
+    Rigid(Affine2),
+    /// Its outline changes but keeps its vertices (path keyframes interpolate vertex by
+    /// vertex; an ellipse's or a rectangle's size moves the same points): the affine map
+    /// that best carries the outline's samples to theirs (least squares), plus what is left of
+    /// each sample's motion, spread inside by inverse squared distance.
+    Deformed { affine: Affine2, samples: Vec<(Vec2, Vec2)> },
+}
+
+/// Samples per outline segment of [`PointMap::Deformed`].
+const OUTLINE_SAMPLES: usize = 8;
+
+impl PointMap {
+    /// The map of fill `a` to fill `b` (the same fill at two times; `a`'s transform
+    /// invertible); `None` when they do not share their outline's structure (verbs and point
+    /// count).
+    fn new(a: &FillRecord, b: &FillRecord) -> Option<PointMap> {
+        if same_shape(&a.path, &b.path) {
+            return Some(PointMap::Rigid(b.m * a.m.inverse()));
+        }
+        if a.path.verbs() != b.path.verbs() || a.path.points().len() != b.path.points().len() {
+            return None;
+        }
+        let pairs = outline_samples(&a.path, &b.path)
+            .into_iter()
+            .map(|(p, q)| (a.m.transform_point2(p), b.m.transform_point2(q)))
+            .collect::<Vec<_>>();
+        let affine = fit_affine(&pairs)?;
+        let samples = pairs.iter().map(|&(p, q)| (p, q - affine.transform_point2(p))).collect();
+        Some(PointMap::Deformed { affine, samples })
+    }
+
+    /// Where canvas point `p` goes.
+    fn apply(&self, p: Vec2) -> Vec2 {
+        match self {
+            PointMap::Rigid(m) => m.transform_point2(p),
+            PointMap::Deformed { affine, samples } => {
+                let (mut sum, mut wsum) = (Vec2::ZERO, 0.0f32);
+                for &(s, r) in samples {
+                    let w = 1.0 / (s.distance_squared(p) + 1.0);
+                    sum += r * w;
+                    wsum += w;
+                }
+                affine.transform_point2(p) + if wsum > 0.0 { sum / wsum } else { Vec2::ZERO }
+            }
+        }
+    }
+}
+
+/// Corresponding points of two outlines of the same structure, in their own coordinates:
+/// [`OUTLINE_SAMPLES`] per segment, evenly in the curve parameter.
+fn outline_samples(a: &tiny_skia::Path, b: &tiny_skia::Path) -> Vec<(Vec2, Vec2)> {
+    use tiny_skia::PathSegment as S;
+    let v = |p: tiny_skia::Point| Vec2::new(p.x, p.y);
+    let mut out = Vec::new();
+    let (mut last_a, mut last_b) = (Vec2::ZERO, Vec2::ZERO);
+    for (sa, sb) in a.segments().zip(b.segments()) {
+        let curve: Option<(Vec<Vec2>, Vec<Vec2>)> = match (sa, sb) {
+            (S::MoveTo(p), S::MoveTo(q)) => {
+                (last_a, last_b) = (v(p), v(q));
+                out.push((last_a, last_b));
+                None
+            }
+            (S::LineTo(p), S::LineTo(q)) => Some((vec![last_a, v(p)], vec![last_b, v(q)])),
+            (S::QuadTo(p1, p), S::QuadTo(q1, q)) => Some((vec![last_a, v(p1), v(p)], vec![last_b, v(q1), v(q)])),
+            (S::CubicTo(p1, p2, p), S::CubicTo(q1, q2, q)) => {
+                Some((vec![last_a, v(p1), v(p2), v(p)], vec![last_b, v(q1), v(q2), v(q)]))
+            }
+            _ => None,
+        };
+        if let Some((ca, cb)) = curve {
+            for k in 1..=OUTLINE_SAMPLES {
+                let t = k as f32 / OUTLINE_SAMPLES as f32;
+                out.push((bezier(&ca, t), bezier(&cb, t)));
+            }
+            (last_a, last_b) = (ca[ca.len() - 1], cb[cb.len() - 1]);
+        }
+    }
+    out
+}
+
+/// The Bézier curve of control points `c` at parameter `t` (de Casteljau).
+fn bezier(c: &[Vec2], t: f32) -> Vec2 {
+    let mut c = c.to_vec();
+    while c.len() > 1 {
+        c = c.windows(2).map(|w| w[0].lerp(w[1], t)).collect();
+    }
+    c[0]
+}
+
+/// The affine map that carries the points `p` of `pairs` closest to their `q` (least
+/// squares); the mean translation when the points do not span the plane.
+fn fit_affine(pairs: &[(Vec2, Vec2)]) -> Option<Affine2> {
+    let n = pairs.len() as f64;
+    if n == 0.0 {
+        return None;
+    }
+    let mean = |f: &dyn Fn(&(Vec2, Vec2)) -> Vec2| {
+        let s = pairs.iter().fold(glam::DVec2::ZERO, |s, x| s + f(x).as_dvec2());
+        s / n
+    };
+    let (mp, mq) = (mean(&|x| x.0), mean(&|x| x.1));
+    // Centered normal equations: C = Σ p̃ p̃ᵀ, D = Σ q̃ p̃ᵀ, A = D C⁻¹.
+    let (mut c, mut d) = (glam::DMat2::ZERO, glam::DMat2::ZERO);
+    for &(p, q) in pairs {
+        let (p, q) = (p.as_dvec2() - mp, q.as_dvec2() - mq);
+        c += glam::DMat2::from_cols(p * p.x, p * p.y);
+        d += glam::DMat2::from_cols(q * p.x, q * p.y);
+    }
+    let scale = c.x_axis.x + c.y_axis.y;
+    let linear = if scale > 0.0 && c.determinant().abs() > 1e-9 * scale * scale {
+        d * c.inverse()
+    } else {
+        glam::DMat2::IDENTITY
+    };
+    let t = mq - linear * mp;
+    let m = Affine2::from_mat2_translation(linear.as_mat2(), t.as_vec2());
+    m.is_finite().then_some(m)
 }
 
 impl Ctx<'_> {
