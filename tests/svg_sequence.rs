@@ -315,3 +315,57 @@ fn groups_sharing_a_name_stay_distinct_layers() {
     let e = anim::load(&d, &LoadOptions::default()).unwrap_err().to_string();
     assert!(e.contains("f1.svg") && e.contains("f2.svg") && e.contains("'arm (2)'"), "{e}");
 }
+
+/// `Animation::fill_motion` of an SVG sequence: the same elements drawn again in every frame
+/// give their motion, whether a frame moves them by a transform or writes their coordinates
+/// anew. A square turns 9° a frame about its center while the group slides right 1 px a frame:
+/// written once with `transform` attributes and once with its corners computed into a path —
+/// both give the analytic step (the turn included, which a mask cannot show); a frame that
+/// draws one more element gives none.
+#[test]
+fn svg_fill_motion_is_the_elements_step() {
+    let turn = |i: u32| 9.0 * i as f64;
+    let corners = |i: u32| -> String {
+        let (s, c) = turn(i).to_radians().sin_cos();
+        let (cx, cy) = (20.0 + i as f64, 20.0);
+        let pts: Vec<String> = [(-5.0, -5.0), (5.0, -5.0), (5.0, 5.0), (-5.0, 5.0)]
+            .iter()
+            .map(|&(x, y)| format!("{:.6},{:.6}", cx + c * x - s * y, cy + s * x + c * y))
+            .collect();
+        format!("M{} L{} L{} L{} Z", pts[0], pts[1], pts[2], pts[3])
+    };
+    let written = |name: &str, body: &dyn Fn(u32) -> String| {
+        let d = dir(name);
+        for i in 0..6 {
+            std::fs::write(d.join(format!("f{i}.svg")), frame(&body(i), 60, 40)).unwrap();
+        }
+        anim::load(&d, &LoadOptions::default()).unwrap()
+    };
+    let by_transform = written("motion-transform", &|i| {
+        let extra = if i == 5 { r##"<rect x="50" y="30" width="3" height="3" fill="#0f0"/>"## } else { "" };
+        format!(
+            r##"<g id="sq" transform="translate({i} 0)"><rect x="15" y="15" width="10" height="10" fill="#f00" transform="rotate({} 20 20)"/>{extra}</g>"##,
+            turn(i)
+        )
+    });
+    let by_coordinates =
+        written("motion-coordinates", &|i| format!(r##"<g id="sq"><path d="{}" fill="#f00"/></g>"##, corners(i)));
+    for a in [&by_transform, &by_coordinates] {
+        let frame = 2;
+        let v = a.fill_motion(0, frame).unwrap().expect("the same elements in both frames");
+        let (th0, th1) = (turn(frame as u32).to_radians() as f32, turn(frame as u32 + 1).to_radians() as f32);
+        let c0 = glam::Vec2::new(20.0 + frame as f32, 20.0);
+        let mut covered = 0;
+        for (k, m) in v.data().iter().enumerate() {
+            let Some(m) = m else { continue };
+            covered += 1;
+            let p = glam::Vec2::new((k % 60) as f32 + 0.5, (k / 60) as f32 + 0.5);
+            let local = glam::Vec2::from_angle(-th0).rotate(p - c0);
+            let next = glam::Vec2::from_angle(th1).rotate(local) + c0 + glam::Vec2::new(1.0, 0.0);
+            assert!((*m - (next - p)).length() < 1e-3, "({p}): {m} against {}", next - p);
+        }
+        assert!((90..=110).contains(&covered), "{covered} pixels with a motion");
+    }
+    assert!(by_transform.fill_motion(0, 4).unwrap().is_none(), "frame 5 draws one more element");
+    assert!(by_transform.fill_motion(0, 5).unwrap().is_none(), "the last frame has no next");
+}

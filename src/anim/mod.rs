@@ -28,6 +28,7 @@
 
 pub mod lottie;
 mod masks;
+mod motion;
 pub(crate) mod svg;
 
 use crate::error::{Error, Result};
@@ -276,10 +277,11 @@ impl Animation {
     /// its own coordinates but keeps its vertices (path keyframes, an ellipse's or rectangle's
     /// keyed size) moves with its outline point by point: the best affine map of the
     /// outline's samples, plus their remaining motion spread inside (exact where the outline
-    /// only scales or shears, an estimate inside one that bends). `Ok(None)` where an outline
-    /// changes its structure (a trim, another vertex count), for SVG sequences, at the last
-    /// frame, and when the two frames do not draw the same fills (one appears or fades out
-    /// entirely).
+    /// only scales or shears, an estimate inside one that bends). An SVG sequence gives the
+    /// same from the region's elements drawn again in both frames (paired in document order).
+    /// `Ok(None)` where an outline changes its structure (a trim, another vertex count), for
+    /// mask sequences, at the last frame, and when the two frames do not draw the same fills
+    /// (one appears or fades out entirely).
     pub fn fill_motion(&self, region: usize, frame: usize) -> Result<Option<Plane<Option<glam::Vec2>>>> {
         self.check(region, frame)?;
         if frame + 1 == self.frames {

@@ -32,9 +32,10 @@
 //! frame file and line where it is first seen, and how many more frames have it; those inside
 //! a layer are that [`Region`]'s warnings, the others the [`Animation`]'s (see `checks`).
 
+use super::motion::{Fill, fills_motion};
 use super::{Animation, LoadOptions, MAX_FRAMES, MAX_SIDE, Region, RegionFrame, RegionKind, RegionRenderer};
 use crate::error::{Error, Result};
-use crate::img::Rgba;
+use crate::img::{Plane, Rgba};
 use std::collections::HashMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -351,20 +352,12 @@ impl SvgSequence {
         scale: (f32, f32),
     ) -> Result<RegionFrame> {
         let path = &self.files[frame];
-        let name = &self.names[region];
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        let layers = top_level(path, &text)?.layers;
+        let doc = self.region_doc(region, frame)?;
         let draw = |sheet: &str| -> Result<tiny_skia::Pixmap> {
             let mut pm = tiny_skia::Pixmap::new(width, height)
                 .ok_or_else(|| Error::animation(path, "could not allocate the canvas"))?;
-            if layers.iter().any(|l| &l.name == name) {
-                let doc = isolate(&text, &layers, name);
-                let opt = usvg::Options {
-                    resources_dir: path.parent().map(Path::to_path_buf),
-                    style_sheet: Some(sheet.to_string()),
-                    ..Default::default()
-                };
-                let tree = usvg::Tree::from_str(&doc, &opt).map_err(|e| Error::animation(path, format!("SVG: {e}")))?;
+            if let Some(doc) = &doc {
+                let tree = self.parse(frame, doc, sheet)?;
                 let ts = tiny_skia::Transform::from_scale(scale.0, scale.1);
                 resvg::render(&tree, ts, &mut pm.as_mut());
             }
@@ -378,6 +371,38 @@ impl SvgSequence {
             None
         };
         Ok(RegionFrame { fill, strokes, opacity_in_alpha: true })
+    }
+
+    /// Frame `frame`'s document with every top-level element but region `region` hidden;
+    /// `None` when the frame does not have the region.
+    fn region_doc(&self, region: usize, frame: usize) -> Result<Option<String>> {
+        let path = &self.files[frame];
+        let name = &self.names[region];
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let layers = top_level(path, &text)?.layers;
+        Ok(layers.iter().any(|l| &l.name == name).then(|| isolate(&text, &layers, name)))
+    }
+
+    /// `doc` (a [`SvgSequence::region_doc`] of frame `frame`) parsed under style sheet `sheet`.
+    fn parse(&self, frame: usize, doc: &str, sheet: &str) -> Result<usvg::Tree> {
+        let path = &self.files[frame];
+        let opt = usvg::Options {
+            resources_dir: path.parent().map(Path::to_path_buf),
+            style_sheet: Some(sheet.to_string()),
+            ..Default::default()
+        };
+        usvg::Tree::from_str(doc, &opt).map_err(|e| Error::animation(path, format!("SVG: {e}")))
+    }
+
+    /// The fills region `region` draws in frame `frame`, in document order, with their
+    /// transforms to the canvas (empty when the frame does not have the region).
+    fn fills(&self, region: usize, frame: usize) -> Result<Vec<Fill>> {
+        let Some(doc) = self.region_doc(region, frame)? else { return Ok(Vec::new()) };
+        let tree = self.parse(frame, &doc, FILLS_ONLY)?;
+        let canvas = glam::Affine2::from_scale(glam::Vec2::new(self.scale.0, self.scale.1));
+        let mut out = Vec::new();
+        collect_fills(tree.root(), canvas, &mut out);
+        Ok(out)
     }
 
     /// The dominant color (area-weighted mode over a 5-bit-per-channel histogram) of region
@@ -398,6 +423,36 @@ impl SvgSequence {
 impl RegionRenderer for SvgSequence {
     fn render(&self, region: usize, frame: usize) -> Result<RegionFrame> {
         self.render_at(region, frame, (self.width, self.height), self.scale)
+    }
+
+    /// The same fills in both frames (the same elements in the same order, each outline with
+    /// the same structure) give their motion ([`fills_motion`]): moved by their transforms or
+    /// by their coordinates alike, as an exporter writes every frame anew.
+    fn fill_motion(&self, region: usize, from: usize, to: usize) -> Option<Plane<Option<glam::Vec2>>> {
+        let (a, b) = (self.fills(region, from).ok()?, self.fills(region, to).ok()?);
+        fills_motion(&a, &b, self.width, self.height)
+    }
+}
+
+/// Every visible filled path under `group` (text as its outlines), in drawing order, with its
+/// transform to the canvas (`canvas` · its absolute transform).
+fn collect_fills(group: &usvg::Group, canvas: glam::Affine2, out: &mut Vec<Fill>) {
+    for node in group.children() {
+        match node {
+            usvg::Node::Group(g) => collect_fills(g, canvas, out),
+            usvg::Node::Text(t) => collect_fills(t.flattened(), canvas, out),
+            usvg::Node::Path(p) => {
+                let Some(fill) = p.fill().filter(|_| p.is_visible()) else { continue };
+                let t = p.abs_transform();
+                let m = glam::Affine2::from_cols_array(&[t.sx, t.ky, t.kx, t.sy, t.tx, t.ty]);
+                let rule = match fill.rule() {
+                    usvg::FillRule::NonZero => tiny_skia::FillRule::Winding,
+                    usvg::FillRule::EvenOdd => tiny_skia::FillRule::EvenOdd,
+                };
+                out.push(Fill { path: p.data().clone(), m: canvas * m, rule });
+            }
+            usvg::Node::Image(_) => {}
+        }
     }
 }
 

@@ -25,8 +25,8 @@
 //! side, which softens the blobs' straight edges without a visible blend.
 //!
 //! **The target's motion** is its flow guide, estimated from the masks — or, where the caller
-//! knows the target's true motion for every step of a pass ([`Motion`]; for a Lottie layer, the
-//! step of its fills' transforms and of their animated outlines,
+//! knows the target's true motion for every step of a pass ([`Motion`]; for a Lottie layer or an
+//! SVG sequence's, the step of its fills' transforms and of their animated outlines,
 //! [`crate::anim::Animation::fill_motion_to`]), that motion: masks show only the normal part of
 //! a motion (a turning disc looks still), so paint carried along them slides over a part that
 //! turns. The guides' other channels are computed from it as from an estimated flow (a still
