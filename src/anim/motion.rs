@@ -93,6 +93,9 @@ enum PointMap {
 /// Samples per outline segment of [`PointMap::Deformed`].
 const OUTLINE_SAMPLES: usize = 8;
 
+/// Most outline samples whose remaining motion is spread inside ([`PointMap::Deformed`]).
+const SPREAD_SAMPLES: usize = 64;
+
 impl PointMap {
     /// The map of fill `a` to fill `b` (the same fill at two times; `a`'s transform
     /// invertible); `None` when they do not share their outline's structure (verbs and point
@@ -109,7 +112,10 @@ impl PointMap {
             .map(|(p, q)| (a.m.transform_point2(p), b.m.transform_point2(q)))
             .collect::<Vec<_>>();
         let affine = fit_affine(&pairs)?;
-        let samples = pairs.iter().map(|&(p, q)| (p, q - affine.transform_point2(p))).collect();
+        // The remaining motion is smooth along the outline; spreading it from at most
+        // SPREAD_SAMPLES samples bounds the work per pixel whatever the outline's length.
+        let stride = pairs.len().div_ceil(SPREAD_SAMPLES).max(1);
+        let samples = pairs.iter().step_by(stride).map(|&(p, q)| (p, q - affine.transform_point2(p))).collect();
         Some(PointMap::Deformed { affine, samples })
     }
 
