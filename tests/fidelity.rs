@@ -46,6 +46,11 @@ fn identity_gives_back_the_exemplar_at_full_size() {
     }
 }
 
+/// `exemplars` on one generated `target` of `frames` frames with `params` (no identity).
+fn runs(exemplars: [&str; 2], target: TargetKind, frames: usize, params: Params) -> SuiteReport {
+    suite(SuiteOptions::default().exemplars(exemplars).targets([target]).identity(false).frames(frames).params(params))
+}
+
 /// Records a failure when `value` is missing or on the wrong side of `floor` (`higher`: a
 /// value must be at least the floor; else at most).
 fn check(what: &str, value: Option<f32>, floor: f32, higher: bool, failures: &mut Vec<String>) {
@@ -250,13 +255,11 @@ fn carried_rim_and_settled_field_keep_the_paint_of_a_long_target() {
 #[test]
 fn extent_falloff_gives_still_interiors_the_exemplar_texture() {
     let run = |falloff: bool| {
-        suite(
-            SuiteOptions::default()
-                .exemplars(["green-wash", "yellow-granules"])
-                .targets([TargetKind::Still])
-                .identity(false)
-                .frames(12)
-                .params(Params::builder().extent_falloff(falloff).build().unwrap()),
+        runs(
+            ["green-wash", "yellow-granules"],
+            TargetKind::Still,
+            12,
+            Params::builder().extent_falloff(falloff).build().unwrap(),
         )
     };
     let (with, without) = (run(true), run(false));
@@ -323,16 +326,7 @@ fn extent_term_tells_the_paint_s_age_on_the_identity() {
 /// (measured 0.075 and 0.059).
 #[test]
 fn thin_parts_take_the_exemplar_colors_at_their_depths() {
-    let run = |params: Params| {
-        suite(
-            SuiteOptions::default()
-                .exemplars(["green-wash", "ink-rims"])
-                .targets([TargetKind::Limb])
-                .identity(false)
-                .frames(24)
-                .params(params),
-        )
-    };
+    let run = |params: Params| runs(["green-wash", "ink-rims"], TargetKind::Limb, 24, params);
     let (fitted, six) = (run(Params::default()), run(Params::builder().levels(6).build().unwrap()));
     let mut failures = Vec::new();
     for (a, b) in fitted.rows.iter().zip(&six.rows) {

@@ -92,7 +92,7 @@ fn paint_with(t: &Seq, keys: &[Keyframe], true_motion: bool) -> Vec<KeyedFrame> 
     let params = Params::builder().seed(1).build().unwrap();
     let mut frames = Vec::new();
     let coverage = |k: usize| Ok(t.coverage(k));
-    let motion = |a: usize, b: usize| Ok(t.motion.as_ref().and_then(|m| m(a, b)));
+    let motion = |a: usize, b: usize| Ok(t.true_motion(a, b));
     let motion: Option<keyframes::Motion<'_>> = (true_motion && t.motion.is_some()).then_some(&motion);
     let reports = std::sync::Mutex::new(Vec::new());
     let progress = |stage: &str, done: usize, total: usize| {
@@ -173,8 +173,8 @@ fn agreement_with_translation(t: &Seq, frames: &[KeyedFrame], v: glam::Vec2) -> 
 /// layer, the step of the transforms its fills are drawn with), where it is known; `None` when
 /// it is known nowhere.
 fn agreement_with_true_motion(t: &Seq, frames: &[KeyedFrame]) -> Option<f32> {
-    let motion = t.motion.as_ref()?;
-    let steps: Vec<Option<Plane<Option<glam::Vec2>>>> = (0..t.frames - 1).map(|k| motion(k, k + 1)).collect();
+    t.motion.as_ref()?;
+    let steps: Vec<Option<Plane<Option<glam::Vec2>>>> = (0..t.frames - 1).map(|k| t.true_motion(k, k + 1)).collect();
     // Frame i's motion is the step from frame i − 1.
     agreement_with(t, frames, &|i, x, y| steps[i - 1].as_ref()?.get(x, y))
 }

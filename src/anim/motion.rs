@@ -4,6 +4,7 @@
 //! drawn under chains of keyed transforms) and SVG sequences (whose frames draw the same
 //! elements again, moved by their transforms or by their coordinates).
 
+use super::lottie::{drawable, to_ts};
 use crate::img::Plane;
 use glam::{Affine2, Vec2};
 use tiny_skia::{FillRule, Mask};
@@ -16,39 +17,30 @@ pub(crate) struct Fill {
     pub rule: FillRule,
 }
 
-/// Largest canvas coordinate a fill may reach to be rasterized for its motion (tiny-skia works
-/// in fixed point).
-const MAX_COORD: f32 = 1_000_000.0;
-
-fn to_ts(m: &Affine2) -> Option<tiny_skia::Transform> {
-    let c = m.to_cols_array();
-    c.iter().all(|x| x.is_finite()).then(|| tiny_skia::Transform::from_row(c[0], c[1], c[2], c[3], c[4], c[5]))
-}
-
 /// The motion of the fills `from` (at one frame, bottom-most first) to the same fills `to` (at
 /// another), per pixel of a `width × height` canvas (pixels; `None` where no fill is). Where
 /// fills overlap, the top-most one's motion is given. Each fill moves by its [`PointMap`]: the
 /// step of its transforms while it keeps its shape in its own coordinates, else its outline's
 /// own motion point by point while the outline keeps its structure (verbs and point count).
 /// `None` when an outline changes its structure, when the two frames do not draw the same
-/// number of fills, or when there is none. A fill with a singular transform, or one reaching
-/// farther than tiny-skia can draw, is skipped.
+/// number of fills, or when there is none. A fill with a singular transform, or one the
+/// renderer would not draw (reaching farther than tiny-skia can, see [`drawable`]), is skipped.
 pub(crate) fn fills_motion(from: &[Fill], to: &[Fill], width: u32, height: u32) -> Option<Plane<Option<Vec2>>> {
     if from.is_empty() || from.len() != to.len() {
         return None;
     }
-    let skipped = |a: &Fill| {
+    // Each fill's transform to draw it with, where it is drawn.
+    let drawn = |a: &Fill| {
         let det = a.m.matrix2.determinant();
-        let reach = a.path.points().iter().all(|p| {
-            let q = a.m.transform_point2(Vec2::new(p.x, p.y));
-            q.is_finite() && q.abs().max_element() <= MAX_COORD
-        });
-        !det.is_finite() || det.abs() < 1e-12 || !reach
+        to_ts(&a.m).filter(|&ts| det.is_finite() && det.abs() >= 1e-12 && drawable(&a.path, ts, 0.0))
     };
-    let maps: Vec<Option<PointMap>> = from
+    let maps: Vec<Option<(tiny_skia::Transform, PointMap)>> = from
         .iter()
         .zip(to)
-        .map(|(a, b)| if skipped(a) { Ok(None) } else { PointMap::new(a, b).map(Some).ok_or(()) })
+        .map(|(a, b)| match drawn(a) {
+            None => Ok(None),
+            Some(ts) => PointMap::new(a, b).map(|m| Some((ts, m))).ok_or(()),
+        })
         .collect::<Result<_, ()>>()
         .ok()?;
     let (w, h) = (width.max(1) as usize, height.max(1) as usize);
@@ -56,7 +48,8 @@ pub(crate) fn fills_motion(from: &[Fill], to: &[Fill], width: u32, height: u32) 
     let mut cover = Mask::new(w as u32, h as u32)?;
     // Bottom-most first: a fill drawn later covers the ones before it.
     for (a, map) in from.iter().zip(&maps) {
-        let (Some(ts), Some(map)) = (to_ts(&a.m), map) else { continue };
+        let Some((ts, map)) = map else { continue };
+        let ts = *ts;
         cover.clear();
         cover.fill_path(&a.path, a.rule, false, ts);
         for (k, &c) in cover.data().iter().enumerate() {
@@ -70,13 +63,6 @@ pub(crate) fn fills_motion(from: &[Fill], to: &[Fill], width: u32, height: u32) 
         }
     }
     Some(out)
-}
-
-/// Whether two paths are the same shape: the same verbs and points within 1e-3 units.
-fn same_shape(a: &tiny_skia::Path, b: &tiny_skia::Path) -> bool {
-    a.verbs() == b.verbs()
-        && a.points().len() == b.points().len()
-        && a.points().iter().zip(b.points()).all(|(p, q)| (p.x - q.x).abs() <= 1e-3 && (p.y - q.y).abs() <= 1e-3)
 }
 
 /// Where a fill's points go from one time to another, on the canvas.
@@ -101,11 +87,13 @@ impl PointMap {
     /// invertible); `None` when they do not share their outline's structure (verbs and point
     /// count).
     fn new(a: &Fill, b: &Fill) -> Option<PointMap> {
-        if same_shape(&a.path, &b.path) {
-            return Some(PointMap::Rigid(b.m * a.m.inverse()));
-        }
         if a.path.verbs() != b.path.verbs() || a.path.points().len() != b.path.points().len() {
             return None;
+        }
+        // The same shape: the same points within 1e-3 units.
+        let (pa, pb) = (a.path.points(), b.path.points());
+        if pa.iter().zip(pb).all(|(p, q)| (p.x - q.x).abs() <= 1e-3 && (p.y - q.y).abs() <= 1e-3) {
+            return Some(PointMap::Rigid(b.m * a.m.inverse()));
         }
         let pairs = outline_samples(&a.path, &b.path)
             .into_iter()

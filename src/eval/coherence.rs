@@ -71,12 +71,11 @@ fn residual_bins(
     bins
 }
 
-/// One pair of frames' [`flow_residual`] over their [`coherence_region`]: its value, the
-/// pixels behind it, and its sums per depth bin ([`depth_bin`] of the smaller of the two
+/// One pair of frames' [`flow_residual`] over their [`coherence_region`]: its value, and its
+/// sums per depth bin (whose counts are the pixels behind it) ([`depth_bin`] of the smaller of the two
 /// frames' distances from the edge).
 pub(crate) struct PairResidual {
     pub value: Option<f32>,
-    pub pixels: u64,
     pub bins: Vec<Mean>,
 }
 
@@ -89,8 +88,8 @@ pub(crate) fn pair_residual(
     let region = coherence_region(prev.1, next.1, params.margin);
     let (a, b) = (prev.1.sdf.data(), next.1.sdf.data());
     let bins = residual_bins(prev.0, next.0, &region, &params.flow, DEPTH_BINS, |k| depth_bin(a[k].min(b[k])));
-    let all = bins.iter().fold(Mean::default(), |a, &b| a.merged(b));
-    PairResidual { value: all.value(), pixels: all.count(), bins }
+    let value = bins.iter().fold(Mean::default(), |a, &b| a.merged(b)).value();
+    PairResidual { value, bins }
 }
 
 /// Incoherent change of a sequence of luma planes: for each pair of consecutive frames
@@ -123,7 +122,7 @@ pub(crate) fn incoherent_change_binned(
             *a = a.merged(b);
         }
     }
-    let samples = pairs.iter().flatten().map(|p| p.pixels).sum();
+    let samples = bins.iter().map(|b| b.count()).sum();
     let values = pairs.iter().map(|p| p.as_ref().and_then(|p| p.value)).collect();
     (Measure { samples, ..Measure::from_frame_values(values) }, bins)
 }

@@ -152,8 +152,8 @@ struct FrameTotals {
     temporal: Mean,
     motion: Mean,
     rim: Option<f32>,
-    coherence: (Option<f32>, u64),
-    /// The flow residual's pixels per depth bin.
+    coherence: Option<f32>,
+    /// The flow residual's pixels per depth bin (all zero for a frame without a pair).
     coherence_bins: Vec<u64>,
 }
 
@@ -256,7 +256,7 @@ impl<'a> Evaluator<'a> {
                     }
                     None => (Mean::default(), Mean::default(), None),
                 };
-                let coherence = pair.as_ref().map_or((None, 0), |p| (p.value, p.pixels));
+                let coherence = pair.as_ref().and_then(|p| p.value);
                 let coherence_bins =
                     pair.map_or_else(|| vec![0; DEPTH_BINS], |p| p.bins.iter().map(|b| b.count()).collect());
                 let contrast_bins =
@@ -304,10 +304,6 @@ impl<'a> Evaluator<'a> {
         let temporal = pooled(|t| t.temporal);
         let motion = pooled(|t| t.motion);
         let rim = Measure::from_frame_values(frames.iter().map(|t| t.rim).collect());
-        let coherence = Measure {
-            samples: frames.iter().map(|t| t.coherence.1).sum(),
-            ..Measure::from_frame_values(frames.iter().map(|t| t.coherence.0).collect())
-        };
         let coverage = coverage_from_counts(&frames.iter().map(|t| t.coverage).collect::<Vec<_>>());
         let mut hist = ColorHistogram::new();
         let mut contrast_bins = vec![Mean::default(); DEPTH_BINS];
@@ -321,6 +317,10 @@ impl<'a> Evaluator<'a> {
                 coherence_counts[k] += t.coherence_bins[k];
             }
         }
+        let coherence = Measure {
+            samples: coherence_counts.iter().sum(),
+            ..Measure::from_frame_values(frames.iter().map(|t| t.coherence).collect())
+        };
         // The exemplar's incoherent change at the output's depths.
         let coherence_at = |counts: &[u64]| Some(r.coherence.value? * r.depth.coherence_factor(counts)?);
         let palette = r.depth.palette(&hist, &counts);
@@ -340,9 +340,9 @@ impl<'a> Evaluator<'a> {
                 motion_agreement: t.motion.value(),
                 edge_darkening: t.rim,
                 edge_darkening_ratio: ratio(t.rim, r.rim.value),
-                incoherent_change: t.coherence.0,
-                incoherent_change_ratio: ratio(t.coherence.0, r.coherence.value),
-                incoherent_change_ratio_depth: ratio(t.coherence.0, coherence_at(&t.coherence_bins)),
+                incoherent_change: t.coherence,
+                incoherent_change_ratio: ratio(t.coherence, r.coherence.value),
+                incoherent_change_ratio_depth: ratio(t.coherence, coherence_at(&t.coherence_bins)),
             })
             .collect();
         let summary = Summary {

@@ -31,6 +31,7 @@ mod value;
 
 pub use model::Model;
 pub use render::{Pass, Target, render};
+pub(crate) use render::{drawable, to_ts};
 
 use super::{
     Animation, Background, LoadOptions, MAX_FRAMES, MAX_SIDE, Region, RegionFrame, RegionKind, RegionRenderer,

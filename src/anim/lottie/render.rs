@@ -41,7 +41,8 @@ pub struct Target {
     pub child: Option<usize>,
 }
 
-fn to_ts(m: &Affine2) -> Option<tiny_skia::Transform> {
+/// `m` as a tiny-skia transform; `None` when a coefficient is not finite.
+pub(crate) fn to_ts(m: &Affine2) -> Option<tiny_skia::Transform> {
     let c = m.to_cols_array();
     if !c.iter().all(|x| x.is_finite()) {
         return None;
@@ -56,7 +57,7 @@ const MAX_DEVICE_COORD: f32 = 1_000_000.0;
 /// True when `path` under `ts`, widened by `pad` local units, stays within safe coordinates.
 /// A path with a point that is not a number is not drawable either: its bounds leave the
 /// point out, and tiny-skia panics on it (found by fuzzing: regression lottie/20261202-66841).
-fn drawable(path: &tiny_skia::Path, ts: tiny_skia::Transform, pad: f32) -> bool {
+pub(crate) fn drawable(path: &tiny_skia::Path, ts: tiny_skia::Transform, pad: f32) -> bool {
     if !path.points().iter().all(|p| p.is_finite()) {
         return false;
     }
