@@ -75,7 +75,10 @@ fn check(what: &str, value: Option<f32>, floor: f32, higher: bool, failures: &mu
 /// 0.80–1.07, palette 0.013–0.030, incoherent change 0.52–0.79, motion 0.61–0.66; after the
 /// contrast balance and the temporal guide voted from each pixel's own match, today's default:
 /// IoU α 0.996–0.997, contrast 0.88–1.01, edge darkening 0.75–1.08, palette 0.012–0.029,
-/// incoherent change 0.51–0.80, motion 0.62–0.67). With the merge's
+/// incoherent change 0.51–0.80, motion 0.62–0.67; with the grain between exemplar pixels
+/// given back half of the deviation the interpolation takes from it, today's default: contrast
+/// 0.91–1.03, edge darkening 0.75–1.08, palette 0.013–0.028, incoherent change 0.53–0.84 —
+/// 0.04 under the ceiling below —, motion 0.62–0.67). With the merge's
 /// estimate voted from the up-scaled field (`--without
 /// carried-estimate`, the previous default): contrast 0.85–0.96, edge darkening 0.77–1.06,
 /// palette 0.011–0.034, incoherent change 0.57–0.82. Before the field was settled and the

@@ -112,7 +112,9 @@ pub struct SynthFlags {
     /// receding-hold (receding paint runs its exemplar time backwards deep inside the shape
     /// too, as in the paper, instead of only within the border band), contrast-balance (the
     /// occurrence penalty spreads the use over the exemplar's positions only, as in the paper,
-    /// and the search drifts to the exemplar's flattest paint; same as --contrast-balance 0).
+    /// and the search drifts to the exemplar's flattest paint; same as --contrast-balance 0),
+    /// grain-phase (the grain of a patch that lands between exemplar pixels keeps only what
+    /// the interpolation leaves of it: softer paint on moving shapes).
     #[arg(long, value_name = "PART", value_enum)]
     pub without: Vec<Part>,
 }
@@ -131,6 +133,7 @@ pub enum Part {
     Settle,
     RecedingHold,
     ContrastBalance,
+    GrainPhase,
 }
 
 impl SynthFlags {
@@ -226,6 +229,7 @@ impl SynthFlags {
                 Part::Settle => b.settle(false),
                 Part::RecedingHold => b.receding_hold(false),
                 Part::ContrastBalance => b.contrast_balance(0.0),
+                Part::GrainPhase => b.grain_phase(false),
             };
         }
         Ok(b.build()?)

@@ -118,7 +118,7 @@ fn level(f: &FrameInputs, l: usize, coarse: Option<Nnf>, st: &mut StageTimes, ou
         // The output: bicubic sampling keeps rotated patches sharper than bilinear.
         out.rgb = timed(&mut st.vote, || {
             if p.parts.keep_grain {
-                vote::vote_grain(sl, &field, src.paper, p.schedule.vote_sigma)
+                vote::vote_grain(sl, &field, src.paper, p.schedule.vote_sigma, p.parts.grain_phase)
             } else {
                 vote::vote_with(sl, &field, src.paper, p.schedule.vote_sigma, true)
             }
