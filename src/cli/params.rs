@@ -427,7 +427,7 @@ mod tests {
         let all_on = SynthFlags { without: Vec::new(), ..flags }.params().unwrap().to_builder();
         let off = all_on.direction_rule(false).time_shift(false).segments(false).advect(false);
         let off = off.ext_normalize(false).extent_falloff(false).carried_rim(false).carried_estimate(false);
-        let off = off.settle(false).receding_hold(false).contrast_balance(0.0).build().unwrap();
+        let off = off.settle(false).receding_hold(false).contrast_balance(0.0).grain_phase(false).build().unwrap();
         assert_eq!(p, off);
     }
 
