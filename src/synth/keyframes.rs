@@ -148,6 +148,9 @@ pub fn paint(
     stage: &str,
     progress: &dyn Progress,
 ) -> Result<()> {
+    // The paintings' grain is carried, not re-sampled from a paint video: the phase gain
+    // ([`super::ParamsBuilder::grain_phase`]) would only add change between frames here.
+    let params = &params.to_builder().grain_phase(false).build()?;
     let mut keys: Vec<&Keyframe> = keys.iter().collect();
     keys.sort_by_key(|k| k.frame);
     if keys.is_empty() {
