@@ -151,8 +151,8 @@ pub(crate) fn vote_grain(src: &SourceLevel, nnf: &Nnf, fill: Rgb, sigma: f32, ph
             for (m, sx, sy, wt) in voters(nnf, &taps, x, y) {
                 let c = src.sample_rgb_cubic(m.i as usize, sx, sy);
                 let (l, sd) = src.sample_grain(m.i as usize, sx, sy);
-                let k = if phase { src.grain_phase_gain(sx, sy) } else { 1.0 };
-                let gi = [k * (c[0] - l[0]), k * (c[1] - l[1]), k * (c[2] - l[2])];
+                let phase_gain = if phase { src.grain_phase_gain(sx, sy) } else { 1.0 };
+                let gi = [c[0] - l[0], c[1] - l[1], c[2] - l[2]].map(|v| phase_gain * v);
                 for k in 0..3 {
                     low[k] += wt * l[k];
                     g[k] += wt * gi[k];
