@@ -11,7 +11,7 @@
 use super::nnf::{Match, Nnf, aligning_rotation};
 use super::params::{HALF, PATCH, Params};
 use super::patch::{Center, Query, Window, patch_error, patch_error_pair};
-use super::source::{Feat, SourceLevel, VALID, bit_set, floor4_i32};
+use super::source::{BORDER_IN_MASK, Feat, IN_MASK, SourceLevel, VALID, bit_set, floor4_i32};
 use super::target::TargetLevel;
 use crate::rng::SplitMix64;
 use glam::Vec2;
@@ -121,11 +121,20 @@ impl<'a> Ctx<'a> {
     }
 
     /// Segment (0 border, 1 interior) the candidates for target pixel q must come from:
-    /// the pixel's own, unless the exemplar has no pixel in it.
+    /// the pixel's own, unless the exemplar has no pixel in it; for a border pixel inside the
+    /// target's mask, [`BORDER_IN_MASK`]: the border segment's centers inside the exemplar's
+    /// mask (paint inside the shape comes from inside the paint; at the levels where the rule
+    /// applies), unless there are none.
     #[inline]
     pub fn wanted_segment(&self, q: usize) -> Option<usize> {
         let seg = self.tgt.segment(q);
-        if !self.params.parts.segments || self.src.valid[seg].is_empty() { None } else { Some(seg) }
+        if !self.params.parts.segments || self.src.valid[seg].is_empty() {
+            None
+        } else if seg == 0 && self.tgt.info[q].flags & IN_MASK != 0 && self.src.border_in_mask > 0 {
+            Some(BORDER_IN_MASK)
+        } else {
+            Some(seg)
+        }
     }
 
     /// The rotations to try for target pixel q and a source pixel with flow direction `s_dir`
@@ -186,12 +195,24 @@ impl<'a> Ctx<'a> {
 
     /// A uniformly random valid match for target pixel q.
     pub fn random_match(&self, q: usize, rng: &mut SplitMix64) -> Match {
-        let seg = self.wanted_segment(q).unwrap_or(if self.src.valid[0].is_empty() { 1 } else { 0 });
+        let wanted = self.wanted_segment(q);
+        let seg = match wanted {
+            Some(BORDER_IN_MASK) => 0,
+            Some(s) => s,
+            None => usize::from(self.src.valid[0].is_empty()),
+        };
         let list = &self.src.valid[seg];
         if list.is_empty() {
             return Match::NONE;
         }
-        let idx = list[rng.below(list.len())] as usize;
+        // A few draws for a center inside the mask where one is wanted (most of the list is).
+        let mut idx = list[rng.below(list.len())] as usize;
+        for _ in 0..8 {
+            if wanted.is_none_or(|s| self.src.is_valid(Some(s), idx)) {
+                break;
+            }
+            idx = list[rng.below(list.len())] as usize;
+        }
         let (i, x, y) = self.src.coords(idx);
         let (c, s, flip) = self.rotation_like(q, self.src.dirs[idx], false);
         Match { x: x as f32, y: y as f32, c, s, err: f32::INFINITY, i: i as u16, flip, ok: true }

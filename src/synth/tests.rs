@@ -296,3 +296,36 @@ fn growth_is_told_from_motion() {
     // Shrinking: nothing newly covered that could be new paint.
     assert!(shift::moves_rather_than_grows(&disc(32.0, 8.0), &disc(32.0, 10.0)));
 }
+
+#[test]
+fn paint_inside_the_shape_comes_from_inside_the_exemplars_paint() {
+    // A disc larger than the exemplar's, growing: before the rule some of its border pixels
+    // kept final matches on the paper just outside the exemplar's mask (valid centers reach
+    // HALF px beyond it), which shows as paper inside the shape (96 of 13 000 here).
+    let (mut s, _, ex) = disc_synthesizer(8, 5, 3);
+    s.set_debug(true);
+    let (w, h) = (96, 96);
+    let c = Vec2::new(48.0, 48.0);
+    let (mut inside, mut outside) = (0usize, 0usize);
+    for k in 0..4 {
+        let t = disc_guides(w, h, c, 30.0 + 1.5 * k as f32, 1.5, k, 4);
+        let field = s.step(&t).unwrap().debug.unwrap().field;
+        for y in 0..h {
+            for x in 0..w {
+                let [i, sx, sy, _] = field.get(x, y);
+                if !t.mask.get(x, y) || i.is_nan() {
+                    continue;
+                }
+                let g = &ex[i as usize].mask;
+                let (px, py) = (sx.round() as usize, sy.round() as usize);
+                if g.get(px.min(g.width() - 1), py.min(g.height() - 1)) {
+                    inside += 1;
+                } else {
+                    outside += 1;
+                }
+            }
+        }
+    }
+    assert!(inside > 4 * 2500, "{inside} pixels checked");
+    assert_eq!(outside, 0, "{outside} pixels inside the target matched outside the exemplar's paint ({inside} inside)");
+}
