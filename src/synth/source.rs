@@ -250,9 +250,9 @@ pub(crate) struct SourceLevel {
     /// Valid centers per segment (0 = border, 1 = interior), as padded indices.
     pub valid: [Vec<u32>; 2],
     /// The same as bit sets over padded indices (bit `idx % 64` of word `idx / 64`), a third
-    /// of the two segments together, and a fourth of [`BORDER_IN_MASK`]'s centers: 1 bit a voxel, so the search rejects a candidate
-    /// outside the mask or in the wrong segment from a table that stays in cache, without
-    /// reading the exemplar at a random place.
+    /// of the two segments together, and a fourth of [`BORDER_IN_MASK`]'s centers: 1 bit a
+    /// voxel, so the search rejects a candidate outside the mask or in the wrong segment from
+    /// a table that stays in cache, without reading the exemplar at a random place.
     pub valid_bits: [Vec<u64>; 4],
     /// How many centers [`BORDER_IN_MASK`] has: the border segment's valid centers inside the
     /// mask itself, or all of them at a level where the rule does not apply.
