@@ -123,8 +123,8 @@ impl<'a> Ctx<'a> {
     /// Segment (0 border, 1 interior) the candidates for target pixel q must come from:
     /// the pixel's own, unless the exemplar has no pixel in it; for a border pixel inside the
     /// target's mask, [`BORDER_IN_MASK`]: the border segment's centers inside the exemplar's
-    /// mask (paint inside the shape comes from inside the paint; at the levels where the rule
-    /// applies), unless there are none.
+    /// mask (paint inside the shape comes from inside the paint), where the level has such a
+    /// table and it is not empty.
     #[inline]
     pub fn wanted_segment(&self, q: usize) -> Option<usize> {
         let seg = self.tgt.segment(q);

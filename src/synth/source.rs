@@ -90,8 +90,9 @@ pub(crate) const INTERIOR: u8 = 2;
 pub(crate) const IN_MASK: u8 = 4;
 
 /// The "segment" a target pixel inside its mask and in the border segment asks its candidates
-/// to come from ([`SourceLevel::valid_table`]): at the finest level, the border segment's
-/// centers inside the exemplar's mask; at coarser levels, all of the border segment's.
+/// to come from ([`SourceLevel::valid_table`]) at the finest level: the border segment's
+/// centers inside the exemplar's mask. Coarser levels have no such table
+/// ([`SourceLevel::border_in_mask`] = 0), and their pixels ask for the border segment.
 ///
 /// Valid centers reach [`HALF`] pixels beyond the mask, so that a patch can sit on the edge
 /// as the target's outermost patches do; but a pixel *inside* the shape whose final match sits
@@ -250,12 +251,13 @@ pub(crate) struct SourceLevel {
     /// Valid centers per segment (0 = border, 1 = interior), as padded indices.
     pub valid: [Vec<u32>; 2],
     /// The same as bit sets over padded indices (bit `idx % 64` of word `idx / 64`), a third
-    /// of the two segments together, and a fourth of [`BORDER_IN_MASK`]'s centers: 1 bit a
-    /// voxel, so the search rejects a candidate outside the mask or in the wrong segment from
-    /// a table that stays in cache, without reading the exemplar at a random place.
+    /// of the two segments together, and a fourth of [`BORDER_IN_MASK`]'s centers (empty at
+    /// the levels where the rule does not apply): 1 bit a voxel, so the search rejects a
+    /// candidate outside the mask or in the wrong segment from a table that stays in cache,
+    /// without reading the exemplar at a random place.
     pub valid_bits: [Vec<u64>; 4],
     /// How many centers [`BORDER_IN_MASK`] has: the border segment's valid centers inside the
-    /// mask itself, or all of them at a level where the rule does not apply.
+    /// mask itself; 0 at a level where the rule does not apply, which turns it off there.
     pub border_in_mask: usize,
     /// |S_seg,i|: mask pixels per segment (0 border, 1 interior) of each frame i (for ω*).
     pub seg_count: Vec<[usize; 2]>,
@@ -612,8 +614,8 @@ pub(crate) fn extent_falloff(on: bool, r: f32) -> f32 {
     if on { (2.0 - r).clamp(0.0, 1.0) } else { 1.0 }
 }
 
-/// One level of the exemplar pyramid; with `inside_only` its [`BORDER_IN_MASK`] table holds
-/// only the border centers inside the mask.
+/// One level of the exemplar pyramid; with `inside_only` it has a [`BORDER_IN_MASK`] table
+/// (the border centers inside the mask).
 fn build_level(
     rgb: &[Plane<Rgb>],
     guides: &[FrameGuides],
@@ -691,12 +693,13 @@ fn build_level(
         bits
     });
     valid_bits[2] = valid_bits[0].iter().zip(&valid_bits[1]).map(|(a, b)| a | b).collect();
-    // The table of border centers inside the mask; without `inside_only` it is the border
-    // segment's (see BORDER_IN_MASK).
-    let mut in_mask_bits = vec![0u64; feat.len().div_ceil(64)];
+    // The table of border centers inside the mask; none without `inside_only` (the rule
+    // does not apply, see BORDER_IN_MASK).
+    let mut in_mask_bits = Vec::new();
     let mut border_in_mask = 0;
-    for &idx in &valid[0] {
-        if !inside_only || info[idx as usize].flags & IN_MASK != 0 {
+    if inside_only {
+        in_mask_bits = vec![0u64; feat.len().div_ceil(64)];
+        for &idx in valid[0].iter().filter(|&&idx| info[idx as usize].flags & IN_MASK != 0) {
             in_mask_bits[idx as usize / 64] |= 1 << (idx % 64);
             border_in_mask += 1;
         }
