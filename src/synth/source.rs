@@ -891,7 +891,10 @@ fn build_grain(level: &mut SourceLevel, rgb: &[Plane<Rgb>], guides: &[FrameGuide
         }
         sums
     });
-    let sums = lagged.reduce(|| [(0.0, 0); 4], |a, b| std::array::from_fn(|k| (a[k].0 + b[k].0, a[k].1 + b[k].1)));
+    // Added in frame order: a parallel reduce groups the f64 sums by how the work was split,
+    // which depends on the thread count.
+    let per_frame: Vec<[(f64, u64); 4]> = lagged.collect();
+    let sums = per_frame.iter().fold([(0.0, 0); 4], |a, b| std::array::from_fn(|k| (a[k].0 + b[k].0, a[k].1 + b[k].1)));
     let mean = sums.map(|(s, n)| if n > 0 { s / n as f64 } else { 0.0 });
     if mean[0] > 0.0 {
         level.grain_rho = mean.map(|m| (m / mean[0]).clamp(-1.0, 1.0) as f32);
