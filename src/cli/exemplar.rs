@@ -393,11 +393,11 @@ fn import(a: ImportArgs, search: &SearchPath, ctx: &Ctx) -> anyhow::Result<()> {
     ex.save(&dir, a.force).with_context(|| format!("could not write exemplar '{}'", dir.display()))?;
     if !ctx.quiet {
         eprintln!(
-            "imported '{}' ({}x{}, {} frames, paper {}, border width {} px): {}",
+            "imported '{}' ({}x{}, {}, paper {}, border width {} px): {}",
             a.name,
             ex.width(),
             ex.height(),
-            ex.len(),
+            if ex.len() == 1 { "1 frame: a still".to_string() } else { format!("{} frames", ex.len()) },
             ex.meta.paper,
             ex.meta.border_width,
             dir.display()

@@ -255,6 +255,16 @@ pub fn from_frames(frames: Vec<Plane<Rgb>>, files: &[PathBuf], opts: &ImportOpti
             });
         }
     }
+    let cut = cut_sides(&masks);
+    if !cut.is_empty() {
+        log::warn!(
+            "'{}': the paint reaches the image's {} edge: a swatch cut by the image's edge is missing that part \
+             of its outline and rim, and paint within 3 px of the image's edge is never matched (at the coarse \
+             levels, within 3 px of theirs); crop with a margin of bare paper around the paint",
+            label(0).display(),
+            cut.join(" and ")
+        );
+    }
     let pigment = pigment_color(frames.last(), masks.last(), report.paper);
     let mut ex = Exemplar {
         dir: None,
@@ -277,6 +287,25 @@ pub fn from_frames(frames: Vec<Plane<Rgb>>, files: &[PathBuf], opts: &ImportOpti
     };
     ex.meta.border_width = super::border::estimate_border_width(&ex).width;
     Ok(ex)
+}
+
+/// The sides of the image (`left`, `top`, `right`, `bottom`) that the paint of some frame
+/// reaches (coverage ≥ ½ in the outermost column or row): where the paint was cut by the edge
+/// of the scan or the crop.
+pub fn cut_sides(masks: &[Plane<f32>]) -> Vec<&'static str> {
+    let mut cut = [false; 4];
+    for m in masks {
+        let (w, h) = m.size();
+        if w == 0 || h == 0 {
+            continue;
+        }
+        let painted = |x: usize, y: usize| m.get(x, y) >= 0.5;
+        cut[0] |= (0..h).any(|y| painted(0, y));
+        cut[1] |= (0..w).any(|x| painted(x, 0));
+        cut[2] |= (0..h).any(|y| painted(w - 1, y));
+        cut[3] |= (0..w).any(|x| painted(x, h - 1));
+    }
+    ["left", "top", "right", "bottom"].into_iter().zip(cut).filter(|&(_, c)| c).map(|(s, _)| s).collect()
 }
 
 /// The typical color of the paint: the mean of the darker half of the painted pixels.
@@ -503,6 +532,27 @@ mod tests {
         let v: Vec<f32> = (0..1000).map(|i| if i % 3 == 0 { 0.8 + (i % 7) as f32 * 0.01 } else { 0.1 }).collect();
         let t = otsu(&v, 1.0);
         assert!(t > 0.1 && t <= 0.8, "{t}");
+    }
+
+    /// A disc of paint on paper, centered at (cx, cy) with radius r, 64 × 48.
+    fn disc(cx: f32, cy: f32, r: f32) -> Plane<Rgb> {
+        Plane::from_fn(64, 48, |x, y| {
+            let d = ((x as f32 - cx).powi(2) + (y as f32 - cy).powi(2)).sqrt();
+            if d <= r { [0.2, 0.35, 0.6] } else { [0.95, 0.94, 0.92] }
+        })
+    }
+
+    #[test]
+    fn paint_cut_by_the_image_edge_is_reported_by_side() {
+        let opts = ImportOptions::default();
+        let framed = from_frames(vec![disc(32.0, 24.0, 12.0)], &[], &opts).unwrap();
+        assert!(cut_sides(&framed.masks).is_empty());
+        // Reaching over the top and the right of the image.
+        let cut = from_frames(vec![disc(56.0, 6.0, 12.0)], &[], &opts).unwrap();
+        assert_eq!(cut_sides(&cut.masks), ["top", "right"]);
+        // Over several frames: any frame counts.
+        let seq = from_frames(vec![disc(32.0, 24.0, 8.0), disc(6.0, 40.0, 12.0)], &[], &opts).unwrap();
+        assert_eq!(cut_sides(&seq.masks), ["left", "bottom"]);
     }
 
     #[test]
