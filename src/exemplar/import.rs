@@ -256,12 +256,13 @@ pub fn from_frames(frames: Vec<Plane<Rgb>>, files: &[PathBuf], opts: &ImportOpti
         }
     }
     let cut = cut_sides(&masks);
-    if !cut.is_empty() {
+    if let Some(first) = masks.iter().position(|m| !cut_sides(std::slice::from_ref(m)).is_empty()) {
+        let frames = if masks.len() > 1 { " (in this frame first)" } else { "" };
         log::warn!(
-            "'{}': the paint reaches the image's {} edge: a swatch cut by the image's edge is missing that part \
-             of its outline and rim, and paint within 3 px of the image's edge is never matched (at the coarse \
-             levels, within 3 px of theirs); crop with a margin of bare paper around the paint",
-            label(0).display(),
+            "'{}': the paint reaches the image's {} edge{frames}: paint cut by the image's edge is missing \
+             that part of its outline and rim, and paint within 3 px of the image's edge is never matched (at \
+             the coarse levels, within 3 px of theirs); crop with a margin of bare paper around the paint",
+            label(first).display(),
             cut.join(" and ")
         );
     }
