@@ -255,8 +255,8 @@ pub fn from_frames(frames: Vec<Plane<Rgb>>, files: &[PathBuf], opts: &ImportOpti
             });
         }
     }
-    let cut = cut_sides(&masks);
-    if let Some(first) = masks.iter().position(|m| !cut_sides(std::slice::from_ref(m)).is_empty()) {
+    if let Some(first) = masks.iter().position(|m| cut_edges(m).contains(&true)) {
+        let cut = cut_sides(&masks);
         let frames = if masks.len() > 1 { " (in this frame first)" } else { "" };
         log::warn!(
             "'{}': the paint reaches the image's {} edge{frames}: paint cut by the image's edge is missing \
@@ -294,19 +294,23 @@ pub fn from_frames(frames: Vec<Plane<Rgb>>, files: &[PathBuf], opts: &ImportOpti
 /// reaches (coverage ≥ ½ in the outermost column or row): where the paint was cut by the edge
 /// of the scan or the crop.
 pub fn cut_sides(masks: &[Plane<f32>]) -> Vec<&'static str> {
-    let mut cut = [false; 4];
-    for m in masks {
-        let (w, h) = m.size();
-        if w == 0 || h == 0 {
-            continue;
-        }
-        let painted = |x: usize, y: usize| m.get(x, y) >= 0.5;
-        cut[0] |= (0..h).any(|y| painted(0, y));
-        cut[1] |= (0..w).any(|x| painted(x, 0));
-        cut[2] |= (0..h).any(|y| painted(w - 1, y));
-        cut[3] |= (0..w).any(|x| painted(x, h - 1));
-    }
+    let cut = masks.iter().map(cut_edges).fold([false; 4], |a, b| std::array::from_fn(|k| a[k] | b[k]));
     ["left", "top", "right", "bottom"].into_iter().zip(cut).filter(|&(_, c)| c).map(|(s, _)| s).collect()
+}
+
+/// Whether the paint of mask `m` reaches its left, top, right and bottom edge.
+fn cut_edges(m: &Plane<f32>) -> [bool; 4] {
+    let (w, h) = m.size();
+    if w == 0 || h == 0 {
+        return [false; 4];
+    }
+    let painted = |x: usize, y: usize| m.get(x, y) >= 0.5;
+    [
+        (0..h).any(|y| painted(0, y)),
+        (0..w).any(|x| painted(x, 0)),
+        (0..h).any(|y| painted(w - 1, y)),
+        (0..w).any(|x| painted(x, h - 1)),
+    ]
 }
 
 /// The typical color of the paint: the mean of the darker half of the painted pixels.

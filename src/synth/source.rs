@@ -684,28 +684,25 @@ fn build_level(
         seg_count.push(n);
     }
     let dirs = info.iter().map(|p| p.dir).collect();
-    let lists = [&valid[0][..], &valid[1][..], &[]];
-    let mut valid_bits = lists.map(|list| {
+    let bit_table = |list: &[u32]| {
         let mut bits = vec![0u64; feat.len().div_ceil(64)];
         for &idx in list {
             bits[idx as usize / 64] |= 1 << (idx % 64);
         }
         bits
-    });
-    valid_bits[2] = valid_bits[0].iter().zip(&valid_bits[1]).map(|(a, b)| a | b).collect();
-    // The table of border centers inside the mask; none without `inside_only` (the rule
-    // does not apply, see BORDER_IN_MASK).
-    let mut in_mask_bits = Vec::new();
-    let mut border_in_mask = 0;
-    if inside_only {
-        in_mask_bits = vec![0u64; feat.len().div_ceil(64)];
-        for &idx in valid[0].iter().filter(|&&idx| info[idx as usize].flags & IN_MASK != 0) {
-            in_mask_bits[idx as usize / 64] |= 1 << (idx % 64);
-            border_in_mask += 1;
-        }
-    }
-    let [b0, b1, b2] = valid_bits;
-    let valid_bits = [b0, b1, b2, in_mask_bits];
+    };
+    let (border, interior) = (bit_table(&valid[0]), bit_table(&valid[1]));
+    let either = border.iter().zip(&interior).map(|(a, b)| a | b).collect();
+    // The border centers inside the mask; none without `inside_only` (the rule does not
+    // apply, see BORDER_IN_MASK).
+    let in_mask: Vec<u32> = if inside_only {
+        valid[0].iter().copied().filter(|&idx| info[idx as usize].flags & IN_MASK != 0).collect()
+    } else {
+        Vec::new()
+    };
+    let border_in_mask = in_mask.len();
+    let in_mask_bits = if inside_only { bit_table(&in_mask) } else { Vec::new() };
+    let valid_bits = [border, interior, either, in_mask_bits];
     SourceLevel {
         w,
         h,
