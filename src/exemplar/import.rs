@@ -255,8 +255,9 @@ pub fn from_frames(frames: Vec<Plane<Rgb>>, files: &[PathBuf], opts: &ImportOpti
             });
         }
     }
-    if let Some(first) = masks.iter().position(|m| cut_edges(m).contains(&true)) {
-        let cut = cut_sides(&masks);
+    let edges: Vec<[bool; 4]> = masks.iter().map(cut_edges).collect();
+    if let Some(first) = edges.iter().position(|e| e.contains(&true)) {
+        let cut = side_names(edges.iter().copied());
         let frames = if masks.len() > 1 { " (in this frame first)" } else { "" };
         log::warn!(
             "'{}': the paint reaches the image's {} edge{frames}: paint cut by the image's edge is missing \
@@ -294,7 +295,12 @@ pub fn from_frames(frames: Vec<Plane<Rgb>>, files: &[PathBuf], opts: &ImportOpti
 /// reaches (coverage ≥ ½ in the outermost column or row): where the paint was cut by the edge
 /// of the scan or the crop.
 pub fn cut_sides(masks: &[Plane<f32>]) -> Vec<&'static str> {
-    let cut = masks.iter().map(cut_edges).fold([false; 4], |a, b| std::array::from_fn(|k| a[k] | b[k]));
+    side_names(masks.iter().map(cut_edges))
+}
+
+/// The names of the sides that any of `edges` ([`cut_edges`] of a mask each) reaches.
+fn side_names(edges: impl Iterator<Item = [bool; 4]>) -> Vec<&'static str> {
+    let cut = edges.fold([false; 4], |a, b| std::array::from_fn(|k| a[k] | b[k]));
     ["left", "top", "right", "bottom"].into_iter().zip(cut).filter(|&(_, c)| c).map(|(s, _)| s).collect()
 }
 

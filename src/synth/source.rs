@@ -695,13 +695,13 @@ fn build_level(
     let either = border.iter().zip(&interior).map(|(a, b)| a | b).collect();
     // The border centers inside the mask; none without `inside_only` (the rule does not
     // apply, see BORDER_IN_MASK).
-    let in_mask: Vec<u32> = if inside_only {
-        valid[0].iter().copied().filter(|&idx| info[idx as usize].flags & IN_MASK != 0).collect()
+    let (border_in_mask, in_mask_bits) = if inside_only {
+        let in_mask: Vec<u32> =
+            valid[0].iter().copied().filter(|&idx| info[idx as usize].flags & IN_MASK != 0).collect();
+        (in_mask.len(), bit_table(&in_mask))
     } else {
-        Vec::new()
+        (0, Vec::new())
     };
-    let border_in_mask = in_mask.len();
-    let in_mask_bits = if inside_only { bit_table(&in_mask) } else { Vec::new() };
     let valid_bits = [border, interior, either, in_mask_bits];
     SourceLevel {
         w,
