@@ -1,9 +1,9 @@
 //! The engine's measured quality (issue: "Measured quality"), with `eval`'s metrics on small
 //! inputs and fixed seeds — statistics, not pixels. Each ablation of the paper (no boundary
 //! term, no direction rule, no extent term, no Ω, no temporal term, no time shift, no
-//! segments, no extent falloff) is run on the same inputs and printed; the tests assert what
-//! each part is responsible for (the extent term's and the falloff's effects show at the size
-//! users run and are asserted in `tests/fidelity.rs`).
+//! segments, no extent falloff, no tone match) is run on the same inputs and printed; the tests
+//! assert what each part is responsible for (the extent term's and the falloff's effects show
+//! at the size users run and are asserted in `tests/fidelity.rs`).
 //!
 //! `cargo test --release --test engine_quality -- --nocapture` prints the ablation table.
 
@@ -142,6 +142,8 @@ fn configurations() -> Vec<(&'static str, Params)> {
         ("no time shift (Δi = 0)", base().time_shift(false).build().unwrap()),
         ("no segments", base().segments(false).build().unwrap()),
         ("no extent falloff", base().extent_falloff(false).build().unwrap()),
+        ("no tone match", base().tone_match(false).build().unwrap()),
+        ("no boundary term, no tone match", base().w_df(0.0).tone_match(false).build().unwrap()),
     ]
 }
 
@@ -210,8 +212,9 @@ fn no_wash_out_and_exemplar_colors() {
     // A still target's interior was matched to the exemplar's least-moved paint (its pale
     // center: the extents say nothing has moved there) until the extents faded out in the
     // interior (Params::extent_falloff); here, at 100 px, that happens at the two finest
-    // levels only. Measured: still 1.00 (0.83 without the falloff), growing 1.06, sliding 0.97;
-    // the still's palette 0.004 (the table `row` prints).
+    // levels only. Measured: still 1.039 (0.891 without the falloff), growing 1.034, sliding
+    // 0.995; the still's palette 0.004 (the table `row` prints). Before the tone match: still
+    // 1.00 (0.83 without the falloff), growing 1.06, sliding 0.97.
     for (what, n, min) in [("still", still, 0.5), ("growing", growing, 0.7), ("sliding", sliding, 0.7)] {
         assert!(n.contrast >= min, "{what}: contrast ratio {} < {min}", n.contrast);
         assert!(n.palette < 0.06, "{what}: palette distance {}", n.palette);
@@ -225,9 +228,10 @@ fn still_target_is_temporally_coherent() {
     // Two parts hold a still target's paint from frame to frame: the temporal term, and
     // MERGENNF judging the carried field against its own picture (the carried estimate), which
     // keeps carried matches unless a new one really fits better. Either alone is enough here;
-    // without both the paint boils. Measured (temporal change ratio): full 0.184, without the
-    // temporal term 0.176, without the carried estimate 0.253, without both 1.276 (5.0× the
-    // largest of the three; floor 3×).
+    // without both the paint boils. Measured (temporal change ratio): full 0.240, without the
+    // temporal term 0.231, without the carried estimate 0.321, without both 1.566 (4.9× the
+    // largest of the three; floor 3×). Before the tone match: 0.184, 0.176, 0.253 and 1.276
+    // (5.0×).
     let (none, _, _) = row("neither");
     let (no_temp, _, _) = row("no temporal");
     let (no_est, _, _) = row("no carried estimate");
@@ -245,16 +249,33 @@ fn paint_moves_with_the_target() {
 
 #[test]
 fn boundary_term_carries_the_rim() {
-    // On moving targets (on a still one the extents already pick rim paint for the border).
-    // Measured (edge darkening, growing and sliding): 0.069 and 0.037 with the term, 0.069 and
-    // 0.023 without. (Before the contrast balance the floor was on the sum, +0.02; the balance
-    // keeps rim paint on the growing ellipse without the term too.) The sliding ellipse, whose
-    // rim the term must carry along, keeps at least 0.01 more (+0.014), and the growing one
-    // loses nothing with it (the same 0.069).
-    let (_, g, l) = row("full");
-    let (_, g0, l0) = row("no boundary");
+    // On moving targets (on a still one the extents already pick rim paint for the border),
+    // with the tone match off: the term decides which paint the search puts in the band, and
+    // the tone match (next test) brings that band's mean density to the exemplar's whatever
+    // paint is there, so with it the term no longer shows in this mean (sliding 0.059 with the
+    // term, 0.057 without). Measured (edge darkening, growing and sliding, no tone match):
+    // 0.069 and 0.037 with the term, 0.069 and 0.023 without. The sliding ellipse, whose rim
+    // the term must carry along, keeps at least 0.01 more (+0.014), and the growing one loses
+    // nothing with it (the same 0.069).
+    let (_, g, l) = row("no tone match");
+    let (_, g0, l0) = row("no boundary term, no tone match");
     let what = format!("rim with {:?} without {:?}", (g.rim, l.rim), (g0.rim, l0.rim));
     assert!(l.rim > l0.rim + 0.01 && g.rim >= g0.rim - 0.005, "{what}");
+}
+
+#[test]
+fn tone_match_gives_the_band_the_exemplars_density() {
+    // The search stitches a target larger than the exemplar's paint from the paler parts of
+    // its rim band (`synth::tone`); the tone match brings the band's density back. Measured
+    // (edge darkening, still, growing, sliding): 0.074, 0.067, 0.059 with it; 0.054, 0.069,
+    // 0.037 without. The still and the sliding ellipse keep at least 0.01 more (+0.020,
+    // +0.022), the growing one, whose band the search already fills with rim paint, within
+    // 0.005 (−0.002), and the colors stay the exemplar's (still palette 0.004 both ways).
+    let (s, g, l) = row("full");
+    let (s0, g0, l0) = row("no tone match");
+    let what = format!("rim with {:?} without {:?}", (s.rim, g.rim, l.rim), (s0.rim, g0.rim, l0.rim));
+    assert!(s.rim > s0.rim + 0.01 && l.rim > l0.rim + 0.01 && g.rim >= g0.rim - 0.005, "{what}");
+    assert!(s.palette <= s0.palette + 0.002, "still palette {} with, {} without", s.palette, s0.palette);
 }
 
 #[test]

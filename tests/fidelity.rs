@@ -22,7 +22,8 @@ fn suite(options: SuiteOptions) -> SuiteReport {
 /// The identity at full size, every bundled exemplar: the issue's floors (PSNR ≥ 28 dB in every
 /// frame, edge darkening ≥ 0.9 of the exemplar's, coverage IoU ≥ 0.97).
 /// Measured: see the README's quality table (identity rows); the worst frame over all five is
-/// green-wash's 34.2 dB (the others 39.2 and over; ink-rims and yellow-granules exact).
+/// green-wash's 34.2 dB (the others 39.3 and over, 39.2 before the tone match; ink-rims and
+/// yellow-granules exact).
 /// Before the supplied motion of the time shift was the exemplar flow's path (module
 /// `shift`, `time_step`) the warp moved the identity's interior matches by the extent's bias,
 /// and the worst frame was 28.1 dB (28.4 before the carried rim was kept); with the search's
@@ -97,15 +98,24 @@ fn check(what: &str, value: Option<f32>, floor: f32, higher: bool, failures: &mu
 /// (48 frames, README) scored IoU α 0.92–0.94, edge darkening −0.27–0.27 and incoherent change
 /// 1.22–2.0.
 ///
-/// Measured again with the engine of 2026-12-04 (the printed table): contrast 0.93–1.06, edge
-/// darkening 0.88–1.09 (blue-bloom growing 0.88), palette 0.012–0.028, incoherent change
-/// 0.53–0.85, motion agreement 0.61–0.67, IoU α 0.996–0.997. The issue's floors are reached
-/// for coverage, incoherent change (≤ 1.2), motion agreement (≥ 0.6), and the contrast
-/// (≥ 0.85), palette (≤ 0.03: ink-rims growing 0.0283) and rim (≥ 0.8) of all four runs.
-/// The floors below are the measured values less a margin (~0.04–0.08 when set, before the
-/// carried estimate, which raised the measured values; the spread between seeds and targets is
-/// ~0.05): contrast 0.78 against today's lowest 0.93, edge darkening 0.72 against 0.88,
-/// palette 0.042 against 0.028, incoherent change 0.88 against 0.85, motion 0.55 against 0.61.
+/// Measured again with the engine of 2026-12-04, before the tone match (the printed table):
+/// contrast 0.93–1.06, edge darkening 0.88–1.09 (blue-bloom growing 0.88), palette
+/// 0.012–0.028, incoherent change 0.53–0.85, motion agreement 0.61–0.67, IoU α 0.996–0.997.
+/// The issue's floors were reached for coverage, incoherent change (≤ 1.2), motion agreement
+/// (≥ 0.6), and the contrast (≥ 0.85), palette (≤ 0.03: ink-rims growing 0.0283) and rim
+/// (≥ 0.8) of all four runs. The floors were then the measured values less a margin
+/// (~0.04–0.08 when set, before the carried estimate, which raised the measured values; the
+/// spread between seeds and targets is ~0.05): contrast 0.78 against the lowest 0.93, edge
+/// darkening 0.72 against 0.88, palette 0.042 against 0.028, incoherent change 0.88 against
+/// 0.85, motion 0.55 against 0.61.
+///
+/// With the tone match (`synth::tone`, default since 2026-12-04; printed table): contrast
+/// 0.96–1.04, edge darkening 1.02–1.24, palette 0.008–0.011, incoherent change 0.54–0.95
+/// (blue-bloom growing 0.85 → 0.95: the paint is darker, and its changes from frame to frame
+/// are larger in luma with it), motion 0.62–0.67, IoU α 0.996–0.997. The floors of contrast,
+/// edge darkening and palette are now the issue's own (0.85, 0.8, 0.03), 0.11, 0.22 and 0.019
+/// under the measured values; the ceiling of incoherent change is the measured 0.95 plus 0.04
+/// (it was 0.88; the issue's is 1.2); motion 0.55 against 0.62.
 #[test]
 fn moving_targets_keep_the_rim_texture_and_coherence() {
     let report = suite(
@@ -120,10 +130,10 @@ fn moving_targets_keep_the_rim_texture_and_coherence() {
         let s = &r.summary;
         let name = |m: &str| format!("{} {} {m}", r.exemplar, r.target);
         check(&name("IoU α"), r.coverage_alpha, 0.98, true, &mut failures);
-        check(&name("contrast"), s.contrast_ratio, 0.78, true, &mut failures);
-        check(&name("edge darkening"), s.edge_darkening_ratio, 0.72, true, &mut failures);
-        check(&name("palette"), s.palette_distance_mean, 0.042, false, &mut failures);
-        check(&name("incoherent change"), s.incoherent_change_ratio, 0.88, false, &mut failures);
+        check(&name("contrast"), s.contrast_ratio, 0.85, true, &mut failures);
+        check(&name("edge darkening"), s.edge_darkening_ratio, 0.8, true, &mut failures);
+        check(&name("palette"), s.palette_distance_mean, 0.03, false, &mut failures);
+        check(&name("incoherent change"), s.incoherent_change_ratio, 0.99, false, &mut failures);
         check(&name("motion agreement"), s.motion_agreement, 0.55, true, &mut failures);
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
@@ -156,10 +166,12 @@ fn moving_targets_keep_the_rim_texture_and_coherence() {
 /// 0.83/0.99 and 0.73/0.76. Green-wash, the hardest (README, `quality`), went from 0.43/0.05
 /// to 0.61/0.28 with those, to 0.64/0.42 with the falloff, to 0.73/1.00 with the carried
 /// rim and to 0.82/1.00 with the settled field (see the next test). Measured again with the
-/// engine of 2026-12-04: ink-rims 0.94 and 1.00, blue-bloom 0.89 and 0.85; whole run contrast
-/// 0.82 and 0.81, edge darkening 1.37 and 1.27; green-wash 0.84/1.00. The floors here were set
-/// at the minima less 0.07 (ink-rims 0.91/0.93, blue-bloom 0.86/0.72): today 0.03/0.07 and
-/// 0.03/0.13 above them.
+/// engine of 2026-12-04, before the tone match: ink-rims 0.94 and 1.00, blue-bloom 0.89 and
+/// 0.85; whole run contrast 0.82 and 0.81, edge darkening 1.37 and 1.27; green-wash 0.84/1.00.
+/// The floors here were set at the minima less 0.07 (ink-rims 0.91/0.93, blue-bloom
+/// 0.86/0.72): then 0.03/0.07 and 0.03/0.13 above them. With the tone match (`synth::tone`,
+/// the default since): ink-rims 0.96 and 0.98, blue-bloom 0.91 and 1.01; whole run contrast
+/// 0.87 and 0.86, edge darkening 1.41 and 1.39 (0.05/0.05 and 0.05/0.29 above the floors).
 #[test]
 fn long_target_keeps_its_paint_in_every_window() {
     let report = suite(
@@ -218,6 +230,12 @@ fn long_target_keeps_its_paint_in_every_window() {
 /// floor is now +0.02 above the run without the carried rim (it was +0.04). Measured margins
 /// today (2026-12-04, the same figures): rim +0.25 over the run without the carried rim (floor
 /// +0.15), lowest window's contrast +0.04 (floor +0.02), whole run +0.06 (floor +0.02).
+///
+/// The three runs are made without the tone match (`synth::tone`): these parts decide which
+/// paint the field carries, the tone match then brings each depth's mean density to the
+/// exemplar's whatever paint is there, and takes over part of what they keep. With it (the
+/// default): rim 0.99 against 0.85 without the carried rim (+0.14), lowest window's contrast
+/// 0.91 against 0.90 and 0.87 without settling, whole run 0.76 against 0.71 without settling.
 #[test]
 fn carried_rim_and_settled_field_keep_the_paint_of_a_long_target() {
     let run = |params: Params| {
@@ -236,9 +254,10 @@ fn carried_rim_and_settled_field_keep_the_paint_of_a_long_target() {
         };
         (min(|w| w.rim_vs_first), min(|w| w.contrast_vs_first), row.summary.contrast_ratio.unwrap_or(0.0))
     };
-    let (rim, contrast, whole) = run(Params::default());
-    let (rim_merged, contrast_merged, _) = run(Params::builder().carried_rim(false).build().unwrap());
-    let (_, contrast_unsettled, whole_unsettled) = run(Params::builder().settle(false).build().unwrap());
+    let base = || Params::builder().tone_match(false);
+    let (rim, contrast, whole) = run(base().build().unwrap());
+    let (rim_merged, contrast_merged, _) = run(base().carried_rim(false).build().unwrap());
+    let (_, contrast_unsettled, whole_unsettled) = run(base().settle(false).build().unwrap());
     let what = format!(
         "lowest window ÷ first: rim {rim:.2}, {rim_merged:.2} without the carried rim; contrast \
          {contrast:.2}, {contrast_merged:.2} without the carried rim, {contrast_unsettled:.2} without \
@@ -263,9 +282,12 @@ fn carried_rim_and_settled_field_keep_the_paint_of_a_long_target() {
 /// (`Params::contrast_balance`), which also keeps the search off the exemplar's flattest paint,
 /// and the temporal guide voted from each pixel's own match (today's default): green-wash 0.852
 /// against 0.791, yellow-granules 0.969 against 0.857; palette 0.023 against 0.024 and 0.025
-/// against 0.030. Floors: the falloff raises the contrast by at least 0.04 (measured +0.061
-/// and +0.112; +0.11 and +0.14 before the balance, when this floor was 0.07) to at least 0.8
-/// (0.852), and does not move the palette away from the exemplar's by more than 0.005.
+/// against 0.030. With the tone match (`synth::tone`, the default since 2026-12-04; printed
+/// table): green-wash 0.89 against 0.83, yellow-granules 0.96 against 0.85; palette 0.0308
+/// against 0.0314 and 0.0159 against 0.0246. Floors: the falloff raises the contrast by at
+/// least 0.04 (measured +0.06 and +0.11; +0.061 and +0.112 before the tone match, +0.11 and
+/// +0.14 before the balance, when this floor was 0.07) to at least 0.8 (0.89; 0.852 before the
+/// tone match), and does not move the palette away from the exemplar's by more than 0.005.
 #[test]
 fn extent_falloff_gives_still_interiors_the_exemplar_texture() {
     let run = |falloff: bool| {
@@ -302,9 +324,11 @@ fn extent_falloff_gives_still_interiors_the_exemplar_texture() {
 /// balance (`Params::contrast_balance`) the run without the term no longer takes the later
 /// frames' flat interiors for the first frame's drops, and the term's gain is smaller: worst
 /// frame 33.9 dB against 32.6 (frame 11), median 39.7 against 37.6. Measured again with the
-/// engine of 2026-12-04: worst frame 34.2 dB against 32.8 (frame 9), median 40.4 against
-/// 37.8. Floors: the term gains at least 0.6 dB on the worst frame (measured 1.4; 17.0 before
-/// the balance, when this floor was 6) and 1 dB on the median (measured 2.6).
+/// engine of 2026-12-04, before the tone match: worst frame 34.2 dB against 32.8 (frame 9),
+/// median 40.4 against 37.8; with the tone match: 34.2 dB against 32.9 (frame 9), median 40.5
+/// against 37.8. Floors: the term gains at least 0.6 dB on the worst frame (measured 1.3; 1.4
+/// before the tone match, 17.0 before the balance, when this floor was 6) and 1 dB on the
+/// median (measured 2.7; 2.6 before the tone match).
 #[test]
 fn extent_term_tells_the_paint_s_age_on_the_identity() {
     let psnr = |w_ext: f32| {
@@ -343,10 +367,17 @@ fn extent_term_tells_the_paint_s_age_on_the_identity() {
 /// 0.085 against 0.059 → 0.076). Floors: at most 0.95× the six levels' distance (measured
 /// 0.54× and 0.89×; the floor was 0.8× before the rule, measured 0.62× and 0.64×) and at most
 /// 0.09 (measured 0.062 and 0.076).
+///
+/// Both runs are made without the tone match (`synth::tone`), which corrects the pale paint
+/// the coarse levels pick as it corrects any other: with it (the default) these two limbs have
+/// the better palette with six levels (green-wash 0.032 against 0.028, ink-rims 0.075 against
+/// 0.053), but over the five video exemplars and seeds 1 and 2 the fitted levels are still
+/// closer on 6 of the 10 runs (mean 0.042 against 0.047; seed 2 green-wash 0.033 against 0.059).
 #[test]
 fn thin_parts_take_the_exemplar_colors_at_their_depths() {
     let run = |params: Params| runs(["green-wash", "ink-rims"], TargetKind::Limb, 24, params);
-    let (fitted, six) = (run(Params::default()), run(Params::builder().levels(6).build().unwrap()));
+    let base = || Params::builder().tone_match(false);
+    let (fitted, six) = (run(base().build().unwrap()), run(base().levels(6).build().unwrap()));
     let mut failures = Vec::new();
     for (a, b) in fitted.rows.iter().zip(&six.rows) {
         assert_eq!(a.max_levels, Some(2), "{}: the limb is fitted", a.exemplar);

@@ -229,9 +229,13 @@ fn lowest_contrast(r: &Report, keys: &[usize]) -> (usize, f32) {
 /// generated target knows: 0.99, against 0.19 for the frames painted on their own
 /// ([`eval::motion_agreement_with`]) — and the coherence only just (0.24: ink-rims's calm
 /// interior boils little even when every frame is painted on its own).
-/// Measured again with the engine of 2026-12-04: translating — lowest contrast 0.945 (frame 16),
-/// incoherent change 0.0055 against 0.0251 (0.22), motion 0.63, whole translation 0.99 (alone
-/// 0.20); growing — lowest contrast 0.940 (frame 24), 0.0060 against 0.0260 (0.23), motion 0.70.
+/// Measured again with the engine of 2026-12-04, before the tone match: translating — lowest
+/// contrast 0.945 (frame 16), incoherent change 0.0055 against 0.0251 (0.22), motion 0.63, whole
+/// translation 0.99 (alone 0.20); growing — lowest contrast 0.940 (frame 24), 0.0060 against
+/// 0.0260 (0.23), motion 0.70. With the tone match (off in `keyframes::paint`, but on in the
+/// paintings and the frames painted alone): translating — 0.957 (frame 16), 0.0057 against
+/// 0.0300 (0.19), motion 0.64, whole translation 0.99 (alone 0.25); growing — 0.959 (frame 22),
+/// 0.0062 against 0.0334 (0.19), motion 0.70.
 /// Floors: PSNR at the keyframe ≥ 35 dB (it is the painting: the 100 dB cap), contrast ≥ 0.8 (the issue's),
 /// coherence ≤ 0.25 (the issue's), motion ≥ 0.58 (the lowest 0.63 less 0.05); against the
 /// whole translation ≥ 0.9 (0.99 less 0.09) carried and ≤ 0.5 painted alone (0.19 plus 0.31:
@@ -279,9 +283,11 @@ fn one_keyframe_is_carried_forward_and_backward() {
 /// every frame (the middle frames are half the one, half the other); the share of pixels taken
 /// from the later painting rises 0.05 → 0.98 over the 22 frames between (first quarter 0.05–
 /// 0.13, last 0.93–0.98), never falling; incoherent change 0.0071 (0.0075 before each pass
-/// painted only its own blobs). Measured again with the engine of 2026-12-04: contrast ≥ 0.945
-/// (frame 5); the later painting's share 0.05 → 0.98 (first quarter 0.05–0.22, last
-/// 0.86–0.98), never falling; incoherent change 0.0076. Floors: contrast ≥ 0.8 (the
+/// painted only its own blobs). Measured again with the engine of 2026-12-04, before the tone
+/// match: contrast ≥ 0.945 (frame 5); the later painting's share 0.05 → 0.98 (first quarter
+/// 0.05–0.22, last 0.86–0.98), never falling; incoherent change 0.0076. With the tone match (in
+/// the paintings): contrast ≥ 0.968 (frame 5); share 0.05 → 0.99 (first quarter 0.05–0.22,
+/// last 0.87–0.99), never falling; incoherent change 0.0080. Floors: contrast ≥ 0.8 (the
 /// issue's); the later painting's share below 0.2 on average in the first quarter of the frames
 /// between and above 0.8 in the last, and falling by no more than 0.03 from a frame to the next.
 #[test]
@@ -363,7 +369,8 @@ fn turning_ball() -> Seq {
 /// its paint is carried along that motion (as `render` does): measured 0.98; carried along the
 /// motion its masks show instead, 0.87 — the turn, which a disc's outline does not show, is
 /// what that misses (0.98 without the turn); painted frame by frame 0.30 (0.26 with the engine
-/// of 2026-12-04; carried 0.985 and 0.873 as before).
+/// of 2026-12-04, before the tone match; carried 0.985 and 0.873 as before). With the tone match
+/// (in the painting): carried 0.984, along the masks' motion 0.874, painted alone 0.338.
 /// Floors: carried ≥ 0.9 (0.98 less 0.08; the 0.7), at least 0.05 above the masks'
 /// carry (0.11 measured), painted alone ≤ 0.55 (0.30 plus 0.25: the measure tells the two
 /// apart).
@@ -411,7 +418,7 @@ fn turning_ball_svg() -> Seq {
 /// An SVG sequence gives its elements' motion as the Lottie file gives its transforms': the
 /// [`turning_ball_svg`] moves as the [`turning_ball`] does, within 0.05 px wherever both
 /// cover a pixel (measured: at most 0.0001 px), and its paint is carried along that motion
-/// (measured 0.982, as for the Lottie ball; floor 0.9 as there).
+/// (measured 0.984, 0.982 before the tone match; floor 0.9 as for the Lottie ball).
 #[test]
 fn svg_sequences_carry_texture_along_their_elements_motion() {
     let (svg, lottie) = (turning_ball_svg(), turning_ball());

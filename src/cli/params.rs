@@ -114,7 +114,9 @@ pub struct SynthFlags {
     /// occurrence penalty spreads the use over the exemplar's positions only, as in the paper,
     /// and the search drifts to the exemplar's flattest paint; same as --contrast-balance 0),
     /// grain-phase (the grain of a patch that lands between exemplar pixels keeps only what
-    /// the interpolation leaves of it: softer paint on moving shapes).
+    /// the interpolation leaves of it: softer paint on moving shapes), tone-match (the output
+    /// keeps the density of the paint its patches were stitched from: paler than the
+    /// exemplar at the same distance from the edge on shapes larger than its paint).
     #[arg(long, value_name = "PART", value_enum)]
     pub without: Vec<Part>,
 }
@@ -134,6 +136,7 @@ pub enum Part {
     RecedingHold,
     ContrastBalance,
     GrainPhase,
+    ToneMatch,
 }
 
 impl SynthFlags {
@@ -230,6 +233,7 @@ impl SynthFlags {
                 Part::RecedingHold => b.receding_hold(false),
                 Part::ContrastBalance => b.contrast_balance(0.0),
                 Part::GrainPhase => b.grain_phase(false),
+                Part::ToneMatch => b.tone_match(false),
             };
         }
         Ok(b.build()?)
@@ -427,7 +431,8 @@ mod tests {
         let all_on = SynthFlags { without: Vec::new(), ..flags }.params().unwrap().to_builder();
         let off = all_on.direction_rule(false).time_shift(false).segments(false).advect(false);
         let off = off.ext_normalize(false).extent_falloff(false).carried_rim(false).carried_estimate(false);
-        let off = off.settle(false).receding_hold(false).contrast_balance(0.0).grain_phase(false).build().unwrap();
+        let off = off.settle(false).receding_hold(false).contrast_balance(0.0).grain_phase(false).tone_match(false);
+        let off = off.build().unwrap();
         assert_eq!(p, off);
     }
 

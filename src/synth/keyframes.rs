@@ -149,8 +149,10 @@ pub fn paint(
     progress: &dyn Progress,
 ) -> Result<()> {
     // The paintings' grain is carried, not re-sampled from a paint video: the phase gain
-    // ([`super::ParamsBuilder::grain_phase`]) would only add change between frames here.
-    let params = &params.to_builder().grain_phase(false).build()?;
+    // ([`super::ParamsBuilder::grain_phase`]) would only add change between frames here; and
+    // the output at a keyframe is the painting, whose tone the matching
+    // ([`super::ParamsBuilder::tone_match`]) must not move.
+    let params = &params.to_builder().grain_phase(false).tone_match(false).build()?;
     let mut keys: Vec<&Keyframe> = keys.iter().collect();
     keys.sort_by_key(|k| k.frame);
     if keys.is_empty() {

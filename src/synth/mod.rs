@@ -37,6 +37,7 @@ mod pyramid;
 mod shift;
 mod source;
 mod target;
+mod tone;
 mod vote;
 
 pub use params::{HALF, PATCH, Params, ParamsBuilder};

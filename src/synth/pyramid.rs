@@ -12,7 +12,7 @@ use super::params::{PATCH, Params};
 use super::patchmatch::{self, Ctx};
 use super::source::{self, MARGIN, SourceLevel, SourcePyramid};
 use super::target::{self, TargetLevel};
-use super::{StageTimes, occurrence, shift, timed, vote};
+use super::{StageTimes, occurrence, shift, timed, tone, vote};
 use crate::guide::FrameGuides;
 use crate::img::{Plane, Rgb};
 use crate::rng::SplitMix64;
@@ -115,12 +115,23 @@ fn level(f: &FrameInputs, l: usize, coarse: Option<Nnf>, st: &mut StageTimes, ou
         }
     }
     if l == 0 {
-        // The output: bicubic sampling keeps rotated patches sharper than bilinear.
+        // The output: bicubic sampling keeps rotated patches sharper than bilinear; its tone
+        // matched to the exemplar's by depth before the grain is added back (`tone`).
         out.rgb = timed(&mut st.vote, || {
-            if p.parts.keep_grain {
-                vote::vote_grain(sl, &field, src.paper, p.schedule.vote_sigma, p.parts.grain_phase)
+            let (mut low, grain): (Vec<Rgb>, Vec<Rgb>) = if p.parts.keep_grain {
+                vote::vote_grain_parts(sl, &field, src.paper, p.schedule.vote_sigma, p.parts.grain_phase)
+                    .into_iter()
+                    .unzip()
             } else {
-                vote::vote_with(sl, &field, src.paper, p.schedule.vote_sigma, true)
+                (vote::vote_with(sl, &field, src.paper, p.schedule.vote_sigma, true), Vec::new())
+            };
+            if p.parts.tone_match {
+                tone::match_tone(&mut low, &grain, &field, &gl.mask, &gl.dist, &src.tone, src.paper);
+            }
+            if grain.is_empty() {
+                low
+            } else {
+                low.into_iter().zip(grain).map(|(l, g)| vote::with_grain(l, g)).collect()
             }
         });
     }

@@ -485,6 +485,8 @@ pub struct SourcePyramid {
     pub(crate) paper: Rgb,
     /// Full-resolution frame size.
     pub(crate) size: (usize, usize),
+    /// The exemplar's pigment density per frame and depth ([`super::tone`]).
+    pub(crate) tone: super::tone::ToneProfile,
 }
 
 impl SourcePyramid {
@@ -547,6 +549,7 @@ impl SourcePyramid {
             border_width,
             paper,
             size: frames[0].size(),
+            tone: super::tone::ToneProfile::new(frames, guides, paper),
         }
     }
 }

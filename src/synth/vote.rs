@@ -123,6 +123,12 @@ fn vote_row(
     }
 }
 
+/// [`vote_grain_parts`] with the grain added back: the output's vote with the grain kept.
+#[cfg(test)]
+pub(crate) fn vote_grain(src: &SourceLevel, nnf: &Nnf, fill: Rgb, sigma: f32, phase: bool) -> Vec<Rgb> {
+    vote_grain_parts(src, nnf, fill, sigma, phase).into_iter().map(|(low, g)| with_grain(low, g)).collect()
+}
+
 /// The final output's vote: [`vote_with`] (bicubic), with the grain's variance kept.
 ///
 /// Each voter's color is split into its low-pass `l` (the exemplar's structure) and its grain
@@ -133,13 +139,17 @@ fn vote_row(
 /// the grain is scaled by 1/√(1 − D/s²) (s² the voters' own local grain variance): 1 where the
 /// voters agree (a coherent field is copied as it is), up to 1/√α where they are independent (the
 /// variance-preserving blend of Heitz & Neyret 2018, generalized to correlated votes).
-pub(crate) fn vote_grain(src: &SourceLevel, nnf: &Nnf, fill: Rgb, sigma: f32, phase: bool) -> Vec<Rgb> {
+///
+/// Returns each pixel's low-pass and its grain (scaled), which [`with_grain`] adds, so that
+/// the low-pass can be corrected first (module `tone`); the grain is 0 where the level has
+/// no grain map (the low-pass is then [`vote_with`]'s bicubic vote).
+pub(crate) fn vote_grain_parts(src: &SourceLevel, nnf: &Nnf, fill: Rgb, sigma: f32, phase: bool) -> Vec<(Rgb, Rgb)> {
     if src.grain.is_empty() {
-        return vote_with(src, nnf, fill, sigma, true);
+        return vote_with(src, nnf, fill, sigma, true).into_iter().map(|c| (c, [0.0; 3])).collect();
     }
     let (w, h) = (nnf.w, nnf.h);
     let taps = taps(sigma);
-    let mut out = vec![fill; w * h];
+    let mut out = vec![(fill, [0.0f32; 3]); w * h];
     out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
         let mut votes: Vec<([f32; 3], f32)> = Vec::with_capacity(taps.len());
         for (x, o) in row.iter_mut().enumerate() {
@@ -175,10 +185,16 @@ pub(crate) fn vote_grain(src: &SourceLevel, nnf: &Nnf, fill: Rgb, sigma: f32, ph
             let alpha = n2 * inv * inv;
             let r = if s2 > 1e-8 { (spread / s2).min(1.0 - alpha) } else { 0.0 };
             let gain = 1.0 / (1.0 - r).max(alpha).sqrt();
-            *o = std::array::from_fn(|k| (low[k] + gain * g[k]).clamp(0.0, 1.0));
+            *o = (low, g.map(|v| gain * v));
         }
     });
     out
+}
+
+/// A low-pass color with its grain added back.
+#[inline]
+pub(crate) fn with_grain(low: Rgb, grain: Rgb) -> Rgb {
+    std::array::from_fn(|k| (low[k] + grain[k]).clamp(0.0, 1.0))
 }
 
 #[cfg(test)]
