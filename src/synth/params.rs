@@ -716,8 +716,10 @@ impl ParamsBuilder {
     /// ellipse's first frame, +0.05 to +0.08 luma 0–7 px inside; the exemplar's own outline
     /// scaled 1.6× +0.07 to +0.12, and only +0.01 to +0.06 at its own size; 49–60 % of the
     /// border band's matches in the palest third of the exemplar's paint at their depth, 14–21 %
-    /// in the darkest. No search weight removed it (λ 0–16, μ 0–16, κ 1, w_df 1–20, w_ext 0,
-    /// fewer pyramid levels, a balance over the tone as over the contrast: within ±0.02).
+    /// in the darkest. No search setting removed it (the scaled outline's first frame with λ 0
+    /// and 16, r 0, w_df 1 and 20, w_ext 0, the vote's σ 0–1.5, two to five pyramid levels,
+    /// more EM iterations: +0.06 to +0.12 at 3–7 px; κ = 1 only deeper than 5 px, on the
+    /// limb), nor a balance over the tone like the contrast balance (module `occurrence`).
     ///
     /// So the output is corrected where it is voted: per 1-px depth bin of the target, the
     /// ratio of the exemplar's mean density `−ln(c/paper)` there (in each match's own frame) to
