@@ -682,7 +682,7 @@ impl ParamsBuilder {
     }
 
     /// Give the grain of a patch that lands between exemplar pixels part of the variance the
-    /// interpolation takes from it (module `vote`, `vote_grain`, with [`Params::keep_grain`]).
+    /// interpolation takes from it (module `vote`, `vote_grain`, with [`Self::keep_grain`]).
     /// A moving shape's patches are turned by the direction rule and carried by sub-pixel
     /// amounts, so the output samples the exemplar between its pixels, and the Catmull–Rom
     /// sample of a fine grain keeps only part of its variance (0.41 of a white grain's half-way
