@@ -20,7 +20,7 @@ use crate::guide::FrameGuides;
 use crate::img::{Mask, Plane, Rgb};
 
 /// Depth bins of the profile, 1 px each; deeper pixels share the last.
-pub(crate) const DEPTHS: usize = 64;
+const DEPTHS: usize = 64;
 /// Pixels a bin of an exemplar frame needs to stand on its own; a bin with fewer takes the
 /// value of the nearest shallower bin that has them.
 const MIN_EXEMPLAR: usize = 24;
