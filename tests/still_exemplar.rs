@@ -96,10 +96,13 @@ fn moving(painter: &dyn Painter) -> SuiteReport {
 /// 0.93, 1.00; palette 0.0227, 0.0229, 0.0228; rim 1.05, 0.98, 0.93 — over the issue-13 floors
 /// but for the growing shape's contrast (the video exemplars' moving runs: 0.96–1.04 and
 /// 1.02–1.24, `tests/fidelity.rs`).
-/// Floors, from the tone match's figures: coherence ratio ≤ 0.25 (the issue's), motion ≥ 0.55
-/// (the lowest 0.60 less 0.05), contrast ≥ 0.75 (0.81 less 0.06), palette ≤ 0.03 (0.0229 plus
-/// 0.007), rim ≥ 0.85 (0.93 less 0.08). (Before the tone match they were contrast ≥ 0.55,
-/// palette ≤ 0.08 and rim ≥ 0.35, from the first build's 0.62, 0.067 and 0.39.)
+/// Since the carried rim match is replaced where the up-scaled one is four times better
+/// (`synth::pyramid`): incoherent change 0.0062, 0.0067, 0.0074; motion 0.65, 0.60, 0.84;
+/// contrast 0.77, 0.92, 0.98; palette 0.0248, 0.0231, 0.0236; rim 0.98, 0.92, 0.85.
+/// Floors, from these figures: coherence ratio ≤ 0.25 (the issue's), motion ≥ 0.55 (the lowest
+/// 0.60 less 0.05), contrast ≥ 0.7 (0.77 less 0.07), palette ≤ 0.03 (0.0248 plus 0.005), rim ≥
+/// 0.8 (0.85 less 0.05). (Before the tone match they were contrast ≥ 0.55, palette ≤ 0.08 and
+/// rim ≥ 0.35, from the first build's 0.62, 0.067 and 0.39.)
 #[test]
 fn a_still_paints_moving_shapes_coherently() {
     let carried = moving(&quality::Engine::default());
@@ -118,13 +121,13 @@ fn a_still_paints_moving_shapes_coherently() {
         if !s.motion_agreement.is_some_and(|v| v >= 0.55) {
             failures.push(format!("{t}: motion agreement {:?}", s.motion_agreement));
         }
-        if !s.contrast_ratio.is_some_and(|v| v >= 0.75) {
+        if !s.contrast_ratio.is_some_and(|v| v >= 0.7) {
             failures.push(format!("{t}: contrast {:?}", s.contrast_ratio));
         }
         if !s.palette_distance_mean.is_some_and(|v| v <= 0.03) {
             failures.push(format!("{t}: palette {:?}", s.palette_distance_mean));
         }
-        if !s.edge_darkening_ratio.is_some_and(|v| v >= 0.85) {
+        if !s.edge_darkening_ratio.is_some_and(|v| v >= 0.8) {
             failures.push(format!("{t}: rim {:?}", s.edge_darkening_ratio));
         }
     }

@@ -105,7 +105,8 @@ pub struct SynthFlags {
     /// (raw target extents, as in the paper), extent-falloff (the extents weigh as much deep
     /// inside a shape as at its edge, as in the paper), carried-rim (in the border band the
     /// merge of the carried and the up-scaled field picks the match with the smaller error, as
-    /// in the paper, instead of keeping the carried one), carried-estimate (the merge of the
+    /// in the paper, instead of keeping the carried one unless the other is four times
+    /// better), carried-estimate (the merge of the
     /// carried and the up-scaled field judges both against an estimate voted from the
     /// up-scaled field instead of the carried one), settle (the shifted field is not
     /// settled onto its pieces: each carried match keeps the position its own warp gave it),

@@ -621,9 +621,10 @@ impl ParamsBuilder {
     /// Keep the carried rim (MERGENNF, module `pyramid`, `merge`): in the border band
     /// (`I^df < 1`, the target's border segment) the match carried from the previous frame —
     /// shifted in time, advected, and re-anchored to the target's distance from the edge by
-    /// SHIFTNNF — is kept wherever there is one, at every level; the up-scaled match competes
-    /// for the rest of the shape as before. Off = the merge compares the two everywhere, as in
-    /// the paper.
+    /// SHIFTNNF — is kept at every level unless the up-scaled match's error is below a quarter
+    /// of its own (only a carried match that has gone wrong is replaced); the up-scaled match
+    /// competes for the rest of the shape as before. Off = the merge compares the two
+    /// everywhere, as in the paper.
     ///
     /// The up-scaled match comes from a level where the band is a pixel or two wide: placed
     /// within a few pixels of the edge, it lands on the exemplar's paler paint behind the rim
@@ -635,6 +636,11 @@ impl ParamsBuilder {
     /// of the first window's rim, every bundled exemplar at least 0.86, and the contrast holds
     /// better too (blue-bloom's lowest window 0.74 → 0.90; the README, `quality`). Newly
     /// covered pixels (a growing edge) have no carried match and are matched afresh as before.
+    ///
+    /// Kept without any comparison (the rule until 2026-12-05), a carried match that had gone
+    /// wrong was never replaced, and the band of a slowly moving shape gathered dark specks and
+    /// streaks over the frames; the factor of four replaces those and keeps the rest (measured
+    /// in `pyramid::merge`'s documentation and the README's quality section).
     ///
     /// Default: on.
     pub fn carried_rim(mut self, on: bool) -> Self {

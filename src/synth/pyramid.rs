@@ -238,6 +238,12 @@ fn initial_field(
     up
 }
 
+/// How many times smaller the up-scaled match's error must be than the carried match's for it
+/// to replace the carried one in the border band (MERGENNF with
+/// [`ParamsBuilder::carried_rim`](super::ParamsBuilder::carried_rim)): only a carried match that
+/// has gone wrong is replaced there.
+const RIM_COHERENCE: f32 = 4.0;
+
 /// The carried field `carried`, with the matches of `up` where nothing is carried (newly
 /// covered pixels): the basis of MERGENNF's estimate.
 fn completed(carried: &Nnf, up: &Nnf) -> Nnf {
@@ -387,10 +393,10 @@ fn repair(ctx: &Ctx, nnf: &mut Nnf) {
 /// the estimate in `ctx`'s target, by default voted from the carried field
 /// ([`ParamsBuilder::carried_estimate`](super::ParamsBuilder::carried_estimate)). With `keep_rim`
 /// ([`ParamsBuilder::carried_rim`](super::ParamsBuilder::carried_rim)) the carried match is
-/// kept without comparison in the target's border segment (`I^df < 1`): SHIFTNNF re-anchored
-/// it to the target's distance from the edge, while the up-scaled match is placed only as
-/// precisely as the coarser level's pixels, which near the edge is often the paler paint
-/// behind the exemplar's rim.
+/// kept in the target's border segment (`I^df < 1`) unless the up-scaled one's error is below
+/// 1/[`RIM_COHERENCE`] of its own: SHIFTNNF re-anchored it to the target's distance from the
+/// edge, while the up-scaled match is placed only as precisely as the coarser level's pixels,
+/// which near the edge is often the paler paint behind the exemplar's rim.
 ///
 /// The finest level merges with the coherence factor κ of the random search
 /// ([`ParamsBuilder::coherence`]): it is only voted, so the merge is the one choice made
@@ -399,6 +405,15 @@ fn repair(ctx: &Ctx, nnf: &mut Nnf) {
 /// carried texture; compared at face value, a fifth of the carried matches were replaced
 /// every frame, each by a paler one (measured on green-wash, long target: mean exemplar
 /// luminance of the replacement +0.01), and over 150 frames the paint paled and lost its rim.
+///
+/// Kept without any comparison (as before 2026-12-05), a carried rim match that had gone wrong
+/// stayed wrong: the border band of a slowly moving shape gathered dark specks and streaks
+/// frame after frame (a 40-px bar moving 0.5 px a frame, 48 frames: the band's change that its
+/// motion does not explain rose from 0.021–0.025 luma a frame in frames 2–8 to 0.025–0.031 in
+/// the last 20 with the still swatch, while the interior stayed at the measure's floor). A
+/// match the up-scaled one beats four times over is such a one; the rim's good matches are
+/// kept (band change in the last 20 frames 0.018–0.024 with the swatch, 0.017–0.027 with
+/// green-wash where it was 0.024–0.032, 0.025–0.027 with ink-rims where it was 0.030–0.035).
 fn merge(ctx: &Ctx, up: &mut Nnf, prev: &Nnf, kappa: f32, keep_rim: bool) {
     let w = up.w;
     up.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
@@ -408,15 +423,11 @@ fn merge(ctx: &Ctx, up: &mut Nnf, prev: &Nnf, kappa: f32, keep_rim: bool) {
             if !pm.ok {
                 continue;
             }
-            if keep_rim && ctx.tgt.segment(q) == 0 {
-                // Kept without comparison; its error is recomputed before any use.
-                *m = Match { err: f32::INFINITY, ..*pm };
-                continue;
-            }
             let win = ctx.window(q);
             let ep = ctx.error_in(&win, pm);
             let eu = ctx.error_in(&win, m);
-            if ep < kappa * eu {
+            let k = if keep_rim && ctx.tgt.segment(q) == 0 { RIM_COHERENCE } else { kappa };
+            if ep < k * eu {
                 *m = Match { err: ep, ..*pm };
             } else {
                 m.err = eu;
