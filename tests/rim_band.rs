@@ -9,7 +9,7 @@
 //! mean over frames 2–8 (the band as first painted) and over the last 20 frames.
 
 use fluidymation::exemplar::{self, SearchPath};
-use fluidymation::img::Plane;
+use fluidymation::img::{Plane, sample_bilinear};
 use fluidymation::synth::{self, Params, Source};
 
 const SIDE: usize = 512;
@@ -33,16 +33,6 @@ fn bar(k: usize) -> Plane<f32> {
     })
 }
 
-/// Bilinear sample of `p` at (x, y), pixel centres at integers.
-fn sample(p: &Plane<f32>, x: f32, y: f32) -> f32 {
-    let (x0, y0) = (x.floor(), y.floor());
-    let (fx, fy) = (x - x0, y - y0);
-    let (x0, y0) = (x0 as usize, y0 as usize);
-    let g = |x: usize, y: usize| p.get(x.min(p.width() - 1), y.min(p.height() - 1));
-    (g(x0, y0) * (1.0 - fx) + g(x0 + 1, y0) * fx) * (1.0 - fy)
-        + (g(x0, y0 + 1) * (1.0 - fx) + g(x0 + 1, y0 + 1) * fx) * fy
-}
-
 /// Mean change of the top and bottom bands, `(frames 2–8, last 20 frames)` each, painted with
 /// the bundled exemplar `name` (seed 1, default settings).
 fn band_change(name: &str) -> [(f32, f32); 2] {
@@ -63,7 +53,7 @@ fn band_change(name: &str) -> [(f32, f32); 2] {
         let mut strip = Vec::with_capacity(40 * 200);
         for r in 0..40 {
             for u in 0..200 {
-                strip.push(sample(&luma, ax + u as f32, ay - RADIUS + r as f32));
+                strip.push(sample_bilinear(&luma, ax + u as f32, ay - RADIUS + r as f32));
             }
         }
         strips.push(strip);
