@@ -298,25 +298,33 @@ fn mean_err(nnf: &Nnf) -> f64 {
     if n > 0 { s / n as f64 } else { 0.0 }
 }
 
-/// Writes voted colors into the rgb lanes of `T^rgb` (`cur`) or `T^prev` (`!cur`).
+/// Writes voted colors into the rgb lanes of `T^rgb` (`cur`) or `T^prev` (`!cur`), and into
+/// their padding the colors mirrored at the window's edge.
 fn write_lanes(tgt: &mut TargetLevel, rgb: &[Rgb], cur: bool) {
     let (w, stride) = (tgt.w, tgt.stride);
+    let h = rgb.len() / w.max(1);
+    if h == 0 {
+        return;
+    }
     let pad = target::TPAD;
     let arr = if cur { &mut tgt.cur } else { &mut tgt.prev };
     arr.par_chunks_mut(stride).enumerate().for_each(|(py, row)| {
-        if py < pad || py >= pad + rgb.len() / w {
-            return;
-        }
-        let y = py - pad;
-        for x in 0..w {
-            let c = rgb[y * w + x];
-            let px = &mut row[x + pad];
+        let y = mirror(py as isize - pad as isize, h);
+        for (px, lanes) in row.iter_mut().enumerate() {
+            let c = rgb[y * w + mirror(px as isize - pad as isize, w)];
             // Quantization units of the color lanes: 0..=255.
-            px[0] = c[0] * 255.0;
-            px[1] = c[1] * 255.0;
-            px[2] = c[2] * 255.0;
+            lanes[0] = c[0] * 255.0;
+            lanes[1] = c[1] * 255.0;
+            lanes[2] = c[2] * 255.0;
         }
     });
+}
+
+/// Index `i` reflected into `0..n` about the edge pixels (…, 2, 1, 0, 1, 2, …), clamped
+/// when `n` is too small to reflect.
+fn mirror(i: isize, n: usize) -> usize {
+    let (last, r) = (n as isize - 1, i.abs());
+    r.min(2 * last - r).clamp(0, last.max(0)) as usize
 }
 
 /// Makes every inherited match (up-scaled, shifted in time, carried over) usable: frame
@@ -434,4 +442,18 @@ fn merge(ctx: &Ctx, up: &mut Nnf, prev: &Nnf, kappa: f32, keep_rim: bool) {
             }
         }
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::mirror;
+
+    #[test]
+    fn the_padding_mirrors_about_the_edge_pixels() {
+        let row: Vec<usize> = (-2..7).map(|i| mirror(i, 5)).collect();
+        assert_eq!(row, [2, 1, 0, 1, 2, 3, 4, 3, 2]);
+        // Too small to reflect: the one pixel there is.
+        assert_eq!((-2..3).map(|i| mirror(i, 1)).collect::<Vec<_>>(), [0; 5]);
+        assert_eq!((-2..4).map(|i| mirror(i, 2)).collect::<Vec<_>>(), [0, 1, 0, 1, 0, 0]);
+    }
 }
