@@ -788,10 +788,12 @@ fn thin_layers_keep_their_shape() {
     // The demo's legs (two 15 px bars) and scarf (a 12 px band) are far thinner than the
     // thesis's blur σ = 8 and border width b = 12 px suit: with the defaults (no blur, b fitted
     // to their thickness) they are painted over most of their area and not beyond it; with the
-    // thesis's values, unfitted, they are not. Measured (frames 1–3): legs 0.945 of the shape
-    // painted (0 px outside), 0.690 unfitted; scarf 0.944 (0 px), 0.763 unfitted. (The floor on
-    // the unfitted share was 0.8× the fitted one; since the contrast balance the unfitted scarf
-    // keeps 0.81× and the floor is 0.12 below the fitted share, the smaller gap less 0.06.)
+    // thesis's values, unfitted, they are not. Measured (frames 1–3): legs 0.997 of the shape
+    // painted (0 px outside), 0.862 unfitted; scarf 0.998 (0 px), 0.919 unfitted. (The floor on
+    // the unfitted share was 0.8× the fitted one, then 0.12 below it after the contrast balance;
+    // painting the first frame twice, `ParamsBuilder::repaint_first`, filled more of the
+    // unfitted layers — with `--without repaint-first` 0.994 / 0.818 and 0.998 / 0.867 — and the
+    // floor is now 0.05 below the fitted share: the smaller gap, 0.079, less about 0.03.)
     let tmp = Scratch::new("thin");
     let masks = tmp.join("masks");
     let o = bin().args(["inspect", "--frames", "1..3", "--masks"]).arg(&masks).arg(demo()).output().unwrap();
@@ -811,7 +813,7 @@ fn thin_layers_keep_their_shape() {
         assert!(share > 0.6, "{layer}: only {share:.2} of the shape painted");
         assert!(outside < 60, "{layer}: {outside} pixels painted well outside the shape");
         assert!(
-            share_fixed < share - 0.12,
+            share_fixed < share - 0.05,
             "{layer}: the thesis's σ and b changed little ({share_fixed:.2} vs {share:.2})"
         );
     }

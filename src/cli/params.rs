@@ -117,7 +117,9 @@ pub struct SynthFlags {
     /// grain-phase (the grain of a patch that lands between exemplar pixels keeps only what
     /// the interpolation leaves of it: softer paint on moving shapes), tone-match (the output
     /// keeps the density of the paint its patches were stitched from: paler than the
-    /// exemplar at the same distance from the edge on shapes larger than its paint).
+    /// exemplar at the same distance from the edge on shapes larger than its paint),
+    /// repaint-first (the first frame is painted once, from a random field: its rim band is
+    /// rough and the paint jumps between frames 1 and 2).
     #[arg(long, value_name = "PART", value_enum)]
     pub without: Vec<Part>,
 }
@@ -138,6 +140,7 @@ pub enum Part {
     ContrastBalance,
     GrainPhase,
     ToneMatch,
+    RepaintFirst,
 }
 
 impl SynthFlags {
@@ -235,6 +238,7 @@ impl SynthFlags {
                 Part::ContrastBalance => b.contrast_balance(0.0),
                 Part::GrainPhase => b.grain_phase(false),
                 Part::ToneMatch => b.tone_match(false),
+                Part::RepaintFirst => b.repaint_first(false),
             };
         }
         Ok(b.build()?)
@@ -433,7 +437,7 @@ mod tests {
         let off = all_on.direction_rule(false).time_shift(false).segments(false).advect(false);
         let off = off.ext_normalize(false).extent_falloff(false).carried_rim(false).carried_estimate(false);
         let off = off.settle(false).receding_hold(false).contrast_balance(0.0).grain_phase(false).tone_match(false);
-        let off = off.build().unwrap();
+        let off = off.repaint_first(false).build().unwrap();
         assert_eq!(p, off);
     }
 

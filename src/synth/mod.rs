@@ -457,7 +457,7 @@ impl Synthesizer {
         // time (SHIFTNNF) at full resolution.
         let (prev_here, shifted) = timed(&mut st.shift, || {
             let prev_here: Option<PrevState> = self.prev.as_ref().map(|prev| rewindow(prev, (win.0, win.1), &pyr));
-            let shifted = prev_here.as_ref().map(|prev| shift_previous(&src, p, &pyr[0], prev));
+            let shifted = prev_here.as_ref().map(|prev| shift_previous(&src, p, &pyr[0], prev, false));
             (prev_here, shifted)
         });
         let has_prev = shifted.as_ref().is_some_and(|n| n.data.iter().any(|m| m.ok));
@@ -472,7 +472,10 @@ impl Synthesizer {
             },
             debug: self.debug,
         };
-        let out = pyramid::run(&inputs, &mut st);
+        let mut out = pyramid::run(&inputs, &mut st);
+        if self.frame == 0 && self.params.parts.repaint_first {
+            out = self.repaint_first(out, &src, &pyr, win, &mut st);
+        }
         let place = Placement { full: (w, h), win };
         let rgb = place.uncrop(&out.rgb, src.paper);
         let debug = self.debug.then(|| DebugViews {
@@ -493,6 +496,36 @@ impl Synthesizer {
             energy: out.energy,
             debug,
         })
+    }
+
+    /// The first frame painted again from its first painting `first` carried onto itself
+    /// ([`ParamsBuilder::repaint_first`]): SHIFTNNF with no motion and the exemplar's time
+    /// held, then the search with the parameters of every later frame.
+    fn repaint_first(
+        &self,
+        first: pyramid::FrameOutcome,
+        src: &SourcePyramid,
+        pyr: &[FrameGuides],
+        win: (usize, usize, usize, usize),
+        st: &mut StageTimes,
+    ) -> pyramid::FrameOutcome {
+        let mut state = PrevState::new(win, first.field, &pyr[0], first.masks);
+        state.flow.fill(glam::Vec2::ZERO);
+        let carried = timed(&mut st.shift, || shift_previous(src, &self.params, &pyr[0], &state, true));
+        let inputs = pyramid::FrameInputs {
+            src,
+            pyr,
+            params: &self.params,
+            frame: self.frame,
+            prev: Some((&carried, &state.masks[..])),
+            debug: self.debug,
+        };
+        let mut out = pyramid::run(&inputs, st);
+        out.evaluations += first.evaluations;
+        for (t, t0) in out.level_times.iter_mut().zip(&first.level_times) {
+            *t += *t0;
+        }
+        out
     }
 
     /// Starts the sequence at a frame whose picture is the source itself: a painted keyframe
@@ -581,8 +614,8 @@ impl Synthesizer {
 }
 
 /// SHIFTNNF of the previous frame's field `prev` into the current frame `g` (the finest level
-/// of its pyramid), at full resolution.
-fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevState) -> Nnf {
+/// of its pyramid), at full resolution; with `hold_time`, every match keeps its exemplar frame.
+fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevState, hold_time: bool) -> Nnf {
     let active: Vec<bool> = source::dilate(&g.mask, HALF).into_vec();
     let inputs = shift::ShiftInputs {
         carry_new: shift::moves_rather_than_grows(g.mask.data(), &prev.masks[0]),
@@ -599,6 +632,7 @@ fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevS
         advect: p.parts.advect,
         settle: p.parts.settle,
         receding_hold: p.parts.receding_hold,
+        hold_time,
     };
     shift::shift_nnf(&inputs, &prev.nnf0)
 }

@@ -41,6 +41,9 @@ pub(crate) struct ShiftInputs<'a> {
     /// Hold receding paint deeper than the border band ([`super::ParamsBuilder::receding_hold`],
     /// [`hold_receding`]).
     pub receding_hold: bool,
+    /// Every match keeps its exemplar frame (Δi = 0): the first frame carried onto itself
+    /// ([`super::ParamsBuilder::repaint_first`]).
+    pub hold_time: bool,
 }
 
 /// Pixels of motion that one frame of deviation from the nominal step costs in the paper's
@@ -261,7 +264,7 @@ pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
         let dt = inp.ext_cur[q] - inp.ext_prev[q];
         // A held match keeps its frame and supplies no motion; like a time step, it needs its
         // center inside the exemplar.
-        let step = if hold_receding(inp, m, q) {
+        let step = if inp.hold_time || hold_receding(inp, m, q) {
             src.info_at(m.i as usize, m.x, m.y).map(|_| (m.i as usize, 0.0))
         } else {
             time_step(src, m, dt, c)
