@@ -26,8 +26,10 @@ fn suite(options: SuiteOptions) -> SuiteReport {
 /// exact). Since the first frame is painted twice (`ParamsBuilder::repaint_first`) green-wash's
 /// frames 6–13, its weak spot since the floor was set (34.0–43 dB), no longer recover to 80 dB
 /// and more afterwards (median 84.8 → 46.0 dB; any second painting of frame 1 does the same,
-/// with or without SHIFTNNF: the field it leaves outside the paint differs, and the growing
-/// edge is carried from there); blue-bloom's worst frame rose 38.4 → 61.9. Before: 34.2 dB
+/// with or without SHIFTNNF, and keeping the first painting's matches outside the paint does
+/// not help: frame 1 is exact either way, so it is matches inside the paint that give the same
+/// colors but not the same next frames — not investigated further); blue-bloom's worst frame
+/// rose 38.4 → 61.9. Before: 34.2 dB
 /// (34.0 with the canvas's edge), the others 39.3 and over (39.2 before the tone match).
 /// Before the supplied motion of the time shift was the exemplar flow's path (module
 /// `shift`, `time_step`) the warp moved the identity's interior matches by the extent's bias,
