@@ -119,7 +119,9 @@ pub struct SynthFlags {
     /// keeps the density of the paint its patches were stitched from: paler than the
     /// exemplar at the same distance from the edge on shapes larger than its paint),
     /// repaint-first (the first frame is painted once, from a random field: its rim band is
-    /// rough and the paint jumps between frames 1 and 2).
+    /// rough and the paint jumps between frames 1 and 2), turn (a still's patches are never
+    /// turned: on a turning shape the carried paint's pieces turn while the patches they
+    /// sample do not, and the paint blurs over a long animation).
     #[arg(long, value_name = "PART", value_enum)]
     pub without: Vec<Part>,
 }
@@ -141,6 +143,7 @@ pub enum Part {
     GrainPhase,
     ToneMatch,
     RepaintFirst,
+    Turn,
 }
 
 impl SynthFlags {
@@ -239,6 +242,7 @@ impl SynthFlags {
                 Part::GrainPhase => b.grain_phase(false),
                 Part::ToneMatch => b.tone_match(false),
                 Part::RepaintFirst => b.repaint_first(false),
+                Part::Turn => b.turn(false),
             };
         }
         Ok(b.build()?)
@@ -437,7 +441,7 @@ mod tests {
         let off = all_on.direction_rule(false).time_shift(false).segments(false).advect(false);
         let off = off.ext_normalize(false).extent_falloff(false).carried_rim(false).carried_estimate(false);
         let off = off.settle(false).receding_hold(false).contrast_balance(0.0).grain_phase(false).tone_match(false);
-        let off = off.repaint_first(false).build().unwrap();
+        let off = off.repaint_first(false).turn(false).build().unwrap();
         assert_eq!(p, off);
     }
 

@@ -43,7 +43,8 @@
 //! time weights and then optimize the frame once more, so that propagation can heal the
 //! seams between the two passes; here the selection is final (a seam between two blobs is
 //! where A's and B's paint meet). Their orientation field and ribbons are not used (the carried
-//! field is the position in the painting; a patch is never turned). The forward pass of one
+//! field is the position in the painting; a patch turns only as the shape does, by the local
+//! rotation of its motion, [`super::ParamsBuilder::turn`]). The forward pass of one
 //! gap between keyframes is held in memory until the backward pass meets it, with the choice
 //! (17 bytes a pixel a frame), and each pass keeps the flows of its guide stream rather than
 //! estimate them twice (8 bytes a masked pixel a frame, until used).

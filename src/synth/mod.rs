@@ -138,10 +138,12 @@ impl Source {
     ///
     /// An exemplar of one frame is a still (a painted swatch): its paint has no motion, so its
     /// extents are zero (the target's are scaled to zero with them, `k = E_S/E_T = 0`), the
-    /// patches are not turned (θ = 0 where a flow has no direction), and SHIFTNNF has no
+    /// flow-alignment rule gives no rotation (a flow has no direction), and SHIFTNNF has no
     /// frame to step to — the residual advection carries all of the target's motion, which
     /// warps the previous frame's field along the target's flow (Frigo et al. 2017 advect the
-    /// previous stylized frame the same way, Bénard et al. 2013 the previous offsets).
+    /// previous stylized frame the same way, Bénard et al. 2013 the previous offsets). The
+    /// patches start unturned (θ = 0) and turn with the shape's local rotation as the field is
+    /// carried ([`ParamsBuilder::turn`]).
     pub fn prepare(ex: &Exemplar, params: &Params) -> Result<Source> {
         ex.validate()?;
         let scale = params.src_scale.unwrap_or(ex.meta.scale);
@@ -633,6 +635,7 @@ fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevS
         settle: p.parts.settle,
         receding_hold: p.parts.receding_hold,
         hold_time,
+        turn: p.parts.turn && src.levels[0].frames == 1,
     };
     shift::shift_nnf(&inputs, &prev.nnf0)
 }

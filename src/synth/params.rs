@@ -108,6 +108,7 @@ pub(crate) struct Parts {
     pub grain_phase: bool,
     pub tone_match: bool,
     pub repaint_first: bool,
+    pub turn: bool,
 }
 
 impl Default for Parts {
@@ -128,6 +129,7 @@ impl Default for Parts {
             grain_phase: true,
             tone_match: true,
             repaint_first: true,
+            turn: true,
         }
     }
 }
@@ -587,6 +589,24 @@ impl ParamsBuilder {
     /// Default: on.
     pub fn repaint_first(mut self, on: bool) -> Self {
         self.p.parts.repaint_first = on;
+        self
+    }
+
+    /// A still's patches turn with the shape (`synth::shift`): a still exemplar has no flow, so
+    /// the flow-alignment rule gives no rotation and every patch was sampled unturned (θ = 0).
+    /// On a turning shape the carried field's pieces turn with the paint — the warp carries
+    /// positions — while the patches they sample did not: neighbouring pixels no longer
+    /// continued each other's patches (on a lobed blob turning 0.9°/frame, the field's pieces
+    /// were turned 7–14° against their patches), the vote averaged patches that disagree, and
+    /// the texture washed out over a long animation. With this, each carried match turns by the
+    /// target's local rotation (½ curl of its flow) as it is carried, and the search samples
+    /// every candidate at the rotation of the carried match at its pixel (the pixels with no
+    /// carried match take their neighbours'), so the paint's pieces and the patches they
+    /// sample turn together. Video exemplars are unchanged: their rotation is the rule's.
+    /// Not in the paper (whose exemplars all have flow). Off = θ = 0 for a still.
+    /// Default: on.
+    pub fn turn(mut self, on: bool) -> Self {
+        self.p.parts.turn = on;
         self
     }
 

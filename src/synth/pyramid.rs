@@ -178,10 +178,46 @@ fn temporal_guide(f: &FrameInputs, l: usize, tgt: &mut TargetLevel, st: &mut Sta
     let sd = timed(&mut st.shift, || shifted.downscale(l, lw, lh));
     let voted = timed(&mut st.vote, || vote::vote(sl, &sd, src.paper, p.schedule.prev_sigma));
     write_lanes(tgt, &voted, false);
+    if p.parts.turn && sl.frames == 1 {
+        tgt.spin = spin_of(&sd);
+    }
     timed(&mut st.shift, || {
         shift::fill_modulation(tgt, sl, &sd, &prev_masks[l], src.border_width, p.schedule.prev_bounds, p.weights.w_prev)
     });
     Some(sd)
+}
+
+/// The rotation of a still's carried field `f` per pixel, spread to the pixels with no
+/// carried match from their neighbours (a few passes; the rest θ = 0).
+fn spin_of(f: &Nnf) -> Vec<(f32, f32)> {
+    let (w, h) = (f.w, f.h);
+    let mut spin: Vec<Option<(f32, f32)>> = f.data.iter().map(|m| m.ok.then_some((m.c, m.s))).collect();
+    for _ in 0..4 {
+        let prev = spin.clone();
+        for (q, o) in spin.iter_mut().enumerate() {
+            if o.is_some() {
+                continue;
+            }
+            let (x, y) = (q % w, q / w);
+            let (mut c, mut s) = (0.0f32, 0.0f32);
+            for (dx, dy) in [(-1isize, 0isize), (1, 0), (0, -1), (0, 1)] {
+                let (nx, ny) = (x as isize + dx, y as isize + dy);
+                if nx >= 0
+                    && ny >= 0
+                    && (nx as usize) < w
+                    && (ny as usize) < h
+                    && let Some((nc, ns)) = prev[ny as usize * w + nx as usize]
+                {
+                    (c, s) = (c + nc, s + ns);
+                }
+            }
+            let n = (c * c + s * s).sqrt();
+            if n > 1e-3 {
+                *o = Some((c / n, s / n));
+            }
+        }
+    }
+    spin.into_iter().map(|o| o.unwrap_or((1.0, 0.0))).collect()
 }
 
 /// The field a level starts from. At the coarsest level: the shifted field (or a random one

@@ -44,6 +44,9 @@ pub(crate) struct ShiftInputs<'a> {
     /// Every match keeps its exemplar frame (Δi = 0): the first frame carried onto itself
     /// ([`super::ParamsBuilder::repaint_first`]).
     pub hold_time: bool,
+    /// The exemplar is a still: every carried match turns with the target's local rotation
+    /// ([`flow_turn`]).
+    pub turn: bool,
 }
 
 /// Pixels of motion that one frame of deviation from the nominal step costs in the paper's
@@ -295,12 +298,40 @@ pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
         }
         *o = placed(inp, q, m, best_i, x, y);
     });
+    if inp.turn && inp.advect {
+        let w = prev.w;
+        out.data.par_iter_mut().enumerate().for_each(|(q, o)| {
+            if o.ok {
+                let a = flow_turn(inp.flow_prev, inp.dist_cur, w, q);
+                if a != 0.0 {
+                    let (sn, cs) = a.sin_cos();
+                    (o.c, o.s) = (o.c * cs + o.s * sn, o.s * cs - o.c * sn);
+                }
+            }
+        });
+    }
     if inp.settle {
         for _ in 0..SETTLE_PASSES {
             out = settle(&out, inp.active);
         }
     }
     out
+}
+
+/// The local rotation of the flow `f` at pixel q, radians per frame: ½ curl, from central
+/// differences 2 px apart; 0 where one of them lies outside the mask (`dist` ≤ 0).
+fn flow_turn(f: &[Vec2], dist: &[f32], w: usize, q: usize) -> f32 {
+    const D: usize = 2;
+    let (x, y, h) = (q % w, q / w, f.len() / w);
+    if x < D || y < D || x + D >= w || y + D >= h {
+        return 0.0;
+    }
+    let n = [q - D, q + D, q - D * w, q + D * w];
+    if n.iter().any(|&k| dist[k] <= 0.0) {
+        return 0.0;
+    }
+    let (l, r, u, d) = (f[n[0]], f[n[1]], f[n[2]], f[n[3]]);
+    ((r.y - l.y) - (d.x - u.x)) / (4 * D) as f32
 }
 
 /// How far (full-resolution pixels, per axis) a neighbour's prediction of a match may lie from
@@ -463,5 +494,34 @@ mod tests {
         assert_eq!(modulation(10.0, 2.0, 10.0), 0.0);
         assert!((modulation(6.0, 2.0, 10.0) - 0.5).abs() < 1e-6);
         assert!(modulation(4.0, 2.0, 10.0) > modulation(8.0, 2.0, 10.0));
+    }
+
+    #[test]
+    fn flow_turn_is_the_local_rotation() {
+        let (w, h) = (21, 21);
+        let center = Vec2::new(10.0, 7.0);
+        let rigid = |turn: f32, shift: Vec2| -> Vec<Vec2> {
+            (0..w * h)
+                .map(|q| {
+                    let p = Vec2::new((q % w) as f32, (q / w) as f32) - center;
+                    Vec2::from_angle(turn).rotate(p) - p + shift
+                })
+                .collect()
+        };
+        let inside = vec![5.0f32; w * h];
+        // A rigid turn by a gives sin a everywhere, whatever the centre and an added translation.
+        for (a, q) in [(0.02f32, 10 * w + 10), (-0.05, 3 * w + 15), (0.01, 17 * w + 2)] {
+            let t = flow_turn(&rigid(a, Vec2::new(1.5, -0.7)), &inside, w, q);
+            assert!((t - a.sin()).abs() < 1e-5, "turn {a}: {t}");
+        }
+        // A translation, or a uniform growth, turns nothing.
+        assert_eq!(flow_turn(&vec![Vec2::new(2.0, 1.0); w * h], &inside, w, 10 * w + 10), 0.0);
+        let grow: Vec<Vec2> = (0..w * h).map(|q| (Vec2::new((q % w) as f32, (q / w) as f32) - center) * 0.1).collect();
+        assert!(flow_turn(&grow, &inside, w, 10 * w + 10).abs() < 1e-6);
+        // Next to the frame's edge or the mask's, nothing is known.
+        assert_eq!(flow_turn(&rigid(0.02, Vec2::ZERO), &inside, w, w + 1), 0.0);
+        let mut edge = inside.clone();
+        edge[10 * w + 12] = -1.0;
+        assert_eq!(flow_turn(&rigid(0.02, Vec2::ZERO), &edge, w, 10 * w + 10), 0.0);
     }
 }

@@ -28,6 +28,9 @@ pub(crate) struct TargetLevel {
     pub active: Vec<u32>,
     /// |T_seg|: mask pixels per segment (0 = border, 1 = interior).
     pub seg_count: [usize; 2],
+    /// A still's rotation M per pixel (cos, sin): that of the carried match, where the field
+    /// was carried; empty = θ = 0 wherever the exemplar has no flow direction.
+    pub spin: Vec<(f32, f32)>,
 }
 
 impl TargetLevel {
@@ -105,7 +108,7 @@ impl TargetLevel {
             }
         }
         let prev = vec![[0.0f32; LANES]; cur.len()];
-        TargetLevel { w, stride, cur, prev, info, mw: vec![0.0; w * h], active, seg_count }
+        TargetLevel { w, stride, cur, prev, info, mw: vec![0.0; w * h], active, seg_count, spin: Vec::new() }
     }
 
     /// Padded index of pixel (x, y).
