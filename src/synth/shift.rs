@@ -45,7 +45,8 @@ pub(crate) struct ShiftInputs<'a> {
     /// ([`super::ParamsBuilder::repaint_first`]).
     pub hold_time: bool,
     /// The exemplar is a still: every carried match turns with the target's local rotation
-    /// ([`flow_turn`]).
+    /// ([`flow_turn`]) — where the field is carried along the motion (with the time shift and
+    /// the advection; without them nothing is carried, and nothing turns).
     pub turn: bool,
 }
 
@@ -298,7 +299,7 @@ pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
         }
         *o = placed(inp, q, m, best_i, x, y);
     });
-    if inp.turn && inp.advect {
+    if inp.turn && inp.advect && inp.time_shift {
         let w = prev.w;
         out.data.par_iter_mut().enumerate().for_each(|(q, o)| {
             if o.ok {
