@@ -635,7 +635,7 @@ fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevS
         settle: p.parts.settle,
         receding_hold: p.parts.receding_hold,
         hold_time,
-        turn: p.parts.turn && src.levels[0].frames == 1,
+        turn: p.turns(src.levels[0].frames),
     };
     shift::shift_nnf(&inputs, &prev.nnf0)
 }

@@ -193,6 +193,11 @@ impl Params {
     pub fn prev_bounds(&self) -> (f32, f32) {
         self.schedule.prev_bounds
     }
+    /// Whether the patches of an exemplar of `frames` frames turn with the shape: a still's,
+    /// with [`ParamsBuilder::turn`] on.
+    pub(crate) fn turns(&self, frames: usize) -> bool {
+        self.parts.turn && frames == 1
+    }
     /// The seed.
     pub fn seed(&self) -> u64 {
         self.seed

@@ -141,20 +141,23 @@ impl<'a> Ctx<'a> {
     /// ([`rotations`]).
     #[inline]
     pub fn rotations(&self, q: usize, s_dir: Vec2) -> ([(f32, f32, bool); 2], usize) {
-        if s_dir == Vec2::ZERO
-            && let Some(&(c, s)) = self.tgt.spin.get(q)
-        {
+        if let Some((c, s)) = self.spin(q, s_dir) {
             return ([(c, s, false); 2], 1);
         }
         rotations(self.params, self.tgt.info[q].dir, s_dir)
     }
 
+    /// A still's rotation at target pixel q ([`TargetLevel::spin`]), where the rule has none to
+    /// give: the source pixel has no flow direction.
+    #[inline]
+    fn spin(&self, q: usize, s_dir: Vec2) -> Option<(f32, f32)> {
+        if s_dir == Vec2::ZERO { self.tgt.spin.get(q).copied() } else { None }
+    }
+
     /// The rotation option of the same kind (aligned or flipped) as `flip`.
     #[inline]
     pub fn rotation_like(&self, q: usize, s_dir: Vec2, flip: bool) -> (f32, f32, bool) {
-        if s_dir == Vec2::ZERO
-            && let Some(&(c, s)) = self.tgt.spin.get(q)
-        {
+        if let Some((c, s)) = self.spin(q, s_dir) {
             return (c, s, false);
         }
         rotation_like(self.params, self.tgt.info[q].dir, s_dir, flip)

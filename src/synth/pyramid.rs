@@ -178,7 +178,7 @@ fn temporal_guide(f: &FrameInputs, l: usize, tgt: &mut TargetLevel, st: &mut Sta
     let sd = timed(&mut st.shift, || shifted.downscale(l, lw, lh));
     let voted = timed(&mut st.vote, || vote::vote(sl, &sd, src.paper, p.schedule.prev_sigma));
     write_lanes(tgt, &voted, false);
-    if p.parts.turn && sl.frames == 1 {
+    if p.turns(sl.frames) {
         tgt.spin = spin_of(&sd);
     }
     timed(&mut st.shift, || {

@@ -217,7 +217,7 @@ fn moved(src: &SourceLevel, m: &Match, x: f32, y: f32) -> Option<Match> {
         }
         let n = (cos_p * cos_p + sin_p * sin_p).sqrt();
         let (cos_p, sin_p) = (cos_p / n, sin_p / n);
-        (c, s) = (m.c * cos_p - m.s * sin_p, m.s * cos_p + m.c * sin_p);
+        (c, s) = m.rotate(cos_p, sin_p);
     }
     Some(Match { x, y, c, s, ..*m })
 }
@@ -305,8 +305,9 @@ pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
             if o.ok {
                 let a = flow_turn(inp.flow_prev, inp.dist_cur, w, q);
                 if a != 0.0 {
+                    // M turned by −a: M·R(−a), whose columns are M applied to R(−a)'s.
                     let (sn, cs) = a.sin_cos();
-                    (o.c, o.s) = (o.c * cs + o.s * sn, o.s * cs - o.c * sn);
+                    (o.c, o.s) = o.rotate(cs, -sn);
                 }
             }
         });
