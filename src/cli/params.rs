@@ -111,7 +111,9 @@ pub struct SynthFlags {
     /// up-scaled field instead of the carried one), settle (the shifted field is not
     /// settled onto its pieces: each carried match keeps the position its own warp gave it),
     /// receding-hold (receding paint runs its exemplar time backwards deep inside the shape
-    /// too, as in the paper, instead of only within the border band), contrast-balance (the
+    /// too, as in the paper, instead of only within the border band), pace (a moving shape's
+    /// paint runs through as many exemplar frames per frame as its motion asks, as in the
+    /// paper: a fast limb ages its paint several frames at a time and boils), contrast-balance (the
     /// occurrence penalty spreads the use over the exemplar's positions only, as in the paper,
     /// and the search drifts to the exemplar's flattest paint; same as --contrast-balance 0),
     /// grain-phase (the grain of a patch that lands between exemplar pixels keeps only what
@@ -139,6 +141,7 @@ pub enum Part {
     CarriedEstimate,
     Settle,
     RecedingHold,
+    Pace,
     ContrastBalance,
     GrainPhase,
     ToneMatch,
@@ -238,6 +241,7 @@ impl SynthFlags {
                 Part::CarriedEstimate => b.carried_estimate(false),
                 Part::Settle => b.settle(false),
                 Part::RecedingHold => b.receding_hold(false),
+                Part::Pace => b.pace(false),
                 Part::ContrastBalance => b.contrast_balance(0.0),
                 Part::GrainPhase => b.grain_phase(false),
                 Part::ToneMatch => b.tone_match(false),
@@ -440,8 +444,8 @@ mod tests {
         let all_on = SynthFlags { without: Vec::new(), ..flags }.params().unwrap().to_builder();
         let off = all_on.direction_rule(false).time_shift(false).segments(false).advect(false);
         let off = off.ext_normalize(false).extent_falloff(false).carried_rim(false).carried_estimate(false);
-        let off = off.settle(false).receding_hold(false).contrast_balance(0.0).grain_phase(false).tone_match(false);
-        let off = off.repaint_first(false).turn(false).build().unwrap();
+        let off = off.settle(false).receding_hold(false).pace(false).contrast_balance(0.0).grain_phase(false);
+        let off = off.tone_match(false).repaint_first(false).turn(false).build().unwrap();
         assert_eq!(p, off);
     }
 

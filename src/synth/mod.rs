@@ -619,8 +619,9 @@ impl Synthesizer {
 /// of its pyramid), at full resolution; with `hold_time`, every match keeps its exemplar frame.
 fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevState, hold_time: bool) -> Nnf {
     let active: Vec<bool> = source::dilate(&g.mask, HALF).into_vec();
+    let moves = shift::moves_rather_than_grows(g.mask.data(), &prev.masks[0]);
     let inputs = shift::ShiftInputs {
-        carry_new: shift::moves_rather_than_grows(g.mask.data(), &prev.masks[0]),
+        carry_new: moves,
         src: &src.levels[0],
         ext_prev: &prev.ext_pos,
         ext_cur: g.ext_pos.data(),
@@ -635,6 +636,7 @@ fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevS
         settle: p.parts.settle,
         receding_hold: p.parts.receding_hold,
         hold_time,
+        max_step: if moves && p.parts.pace && p.parts.advect { 1 } else { usize::MAX },
         turn: p.turns(src.levels[0].frames),
     };
     shift::shift_nnf(&inputs, &prev.nnf0)

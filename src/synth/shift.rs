@@ -44,6 +44,10 @@ pub(crate) struct ShiftInputs<'a> {
     /// Every match keeps its exemplar frame (Δi = 0): the first frame carried onto itself
     /// ([`super::ParamsBuilder::repaint_first`]).
     pub hold_time: bool,
+    /// The most exemplar frames a match steps through in one target frame, either way:
+    /// unbounded (`usize::MAX`) is the paper's rule; 1 where the shape moves rather than grows
+    /// ([`super::ParamsBuilder::pace`]).
+    pub max_step: usize,
     /// The exemplar is a still: every carried match turns with the target's local rotation
     /// ([`flow_turn`]) — where the field is carried along the motion (with the time shift and
     /// the advection; without them nothing is carried, and nothing turns).
@@ -70,8 +74,8 @@ pub(crate) fn step_cost(ext_scale: f32, frames: usize) -> f32 {
 /// The time step of match m under the target's extent change `dt` (see [`shift_nnf`]): the
 /// new frame index i + Δi and the motion the exemplar supplies by it — the path its paint at
 /// the match travels over the frames stepped, `Σ_k |S^flow(k, x, y)|` for k from i to
-/// i + Δi (exclusive); `c` is the cost of one frame off the nominal step. `None` where the
-/// match is outside the exemplar.
+/// i + Δi (exclusive); `c` is the cost of one frame off the nominal step, and |Δi| is at most
+/// `max_step`. `None` where the match is outside the exemplar.
 ///
 /// The supplied motion is the flow's path, not the change of the extent at the match
 /// `|S^ext(i+Δi) − S^ext(i)|` that chooses Δi: at a fixed point the extent changes by
@@ -80,7 +84,7 @@ pub(crate) fn step_cost(ext_scale: f32, frames: usize) -> f32 {
 /// frame of motion left over for the warp where there is none, which drifted the interior's
 /// matches 1–2 px off their own within 30 frames; worst frame 28.1 dB on green-wash, 34 dB
 /// with the path).
-fn time_step(src: &SourceLevel, m: &Match, dt: f32, c: f32) -> Option<(usize, f32)> {
+fn time_step(src: &SourceLevel, m: &Match, dt: f32, c: f32, max_step: usize) -> Option<(usize, f32)> {
     let i = m.i as usize;
     let (idx0, _) = src.info_at(i, m.x, m.y)?;
     let pix = idx0 - i * src.frame_len;
@@ -102,9 +106,9 @@ fn time_step(src: &SourceLevel, m: &Match, dt: f32, c: f32) -> Option<(usize, f3
     };
     consider(i);
     if m.flip {
-        (0..i).rev().for_each(&mut consider);
+        (i.saturating_sub(max_step)..i).rev().for_each(&mut consider);
     } else {
-        (i + 1..src.frames).for_each(&mut consider);
+        (i + 1..src.frames.min(i.saturating_add(max_step).saturating_add(1))).for_each(&mut consider);
     }
     let speed = |k: usize| src.info[k * src.frame_len + pix].speed;
     let path = if best_i >= i { (i..best_i).map(speed).sum() } else { (best_i..i).map(speed).sum() };
@@ -120,6 +124,19 @@ fn time_step(src: &SourceLevel, m: &Match, dt: f32, c: f32) -> Option<(usize, f3
 /// boil; held, its motion is all carried by the advection.
 fn hold_receding(inp: &ShiftInputs, m: &Match, q: usize) -> bool {
     inp.receding_hold && inp.advect && m.flip && inp.dist_cur[q] > inp.band
+}
+
+/// The time step of q's own carried match `m`: [`time_step`] (at most
+/// [`ShiftInputs::max_step`] frames), or, for a held match ([`ShiftInputs::hold_time`],
+/// [`hold_receding`]), its own frame, supplying no motion — like a time step, it needs its
+/// center inside the exemplar. (The match the advection takes from the pixel behind q,
+/// [`warped_from`], takes its plain time step: the hold is judged at the match's own pixel.)
+fn step_of(inp: &ShiftInputs, m: &Match, q: usize, dt: f32, c: f32) -> Option<(usize, f32)> {
+    if inp.hold_time || hold_receding(inp, m, q) {
+        inp.src.info_at(m.i as usize, m.x, m.y).map(|_| (m.i as usize, 0.0))
+    } else {
+        time_step(inp.src, m, dt, c, inp.max_step)
+    }
 }
 
 /// Whether a shape moves rather than grows from the previous mask to the current one (both
@@ -166,19 +183,26 @@ fn carried_in(inp: &ShiftInputs, prev: &Nnf, q: usize, c: f32) -> Option<Match> 
         }
     }
     let dt = inp.ext_cur[q] - inp.ext_prev[q];
-    let (m, i, x, y) = warped_from(inp.src, prev, p, dt, c)?;
+    let (m, i, x, y) = warped_from(inp.src, prev, p, dt, c, inp.max_step)?;
     Some(placed(inp, q, m, i, x, y))
 }
 
 /// The previous frame's match nearest to `p` (at `⌊p⌉`), time-shifted under the extent change
-/// `dt` ([`time_step`]), and the point it stands for at `p`: its position offset by
-/// `M·(p − ⌊p⌉)`. `None` where `⌊p⌉` is off the field or had no match.
-fn warped_from(src: &SourceLevel, prev: &Nnf, p: Vec2, dt: f32, c: f32) -> Option<(Match, usize, f32, f32)> {
+/// `dt` ([`time_step`], at most `max_step` frames), and the point it stands for at `p`: its
+/// position offset by `M·(p − ⌊p⌉)`. `None` where `⌊p⌉` is off the field or had no match.
+fn warped_from(
+    src: &SourceLevel,
+    prev: &Nnf,
+    p: Vec2,
+    dt: f32,
+    c: f32,
+    max_step: usize,
+) -> Option<(Match, usize, f32, f32)> {
     let m = prev.data[prev.index_near(p)?];
     if !m.ok {
         return None;
     }
-    let (i, _) = time_step(src, &m, dt, c)?;
+    let (i, _) = time_step(src, &m, dt, c, max_step)?;
     let r = p.round();
     let (dx, dy) = m.rotate(p.x - r.x, p.y - r.y);
     Some((m, i, m.x + dx, m.y + dy))
@@ -230,7 +254,9 @@ fn moved(src: &SourceLevel, m: &Match, x: f32, y: f32) -> Option<Match> {
 /// the same with `S^ext−` and `c·|Δi|`: near-ties go to the nominal step — one exemplar frame
 /// per target frame for aligned flows (stationary paint keeps its own pace instead of stopping),
 /// none for opposite flows (time runs backwards only as far as the motion asks). The paper's
-/// rule is `c → 0`; with advection `c` = [`step_cost`].
+/// rule is `c → 0`; with advection `c` = [`step_cost`]. |Δi| is at most
+/// [`ShiftInputs::max_step`]: one frame where the shape moves rather than grows (see
+/// [`super::ParamsBuilder::pace`]). A held match keeps its frame ([`step_of`]).
 ///
 /// Then, with [`ShiftInputs::advect`]: the motion the time shift did not supply is carried by
 /// warping the field — the target pixel q takes the shifted match of the previous frame's
@@ -247,7 +273,6 @@ fn moved(src: &SourceLevel, m: &Match, x: f32, y: f32) -> Option<Match> {
 /// re-anchored to the target's distance from the edge. Last, with [`ShiftInputs::settle`],
 /// the field is settled onto its pieces ([`settle`]).
 pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
-    let src = inp.src;
     let c = if inp.advect { inp.step_cost } else { TIE_BREAK };
     let mut out = Nnf::new(prev.w, prev.h);
     out.data.par_iter_mut().enumerate().for_each(|(q, o)| {
@@ -266,14 +291,7 @@ pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
             return;
         }
         let dt = inp.ext_cur[q] - inp.ext_prev[q];
-        // A held match keeps its frame and supplies no motion; like a time step, it needs its
-        // center inside the exemplar.
-        let step = if inp.hold_time || hold_receding(inp, m, q) {
-            src.info_at(m.i as usize, m.x, m.y).map(|_| (m.i as usize, 0.0))
-        } else {
-            time_step(src, m, dt, c)
-        };
-        let Some((best_i, supplied)) = step else {
+        let Some((best_i, supplied)) = step_of(inp, m, q, dt, c) else {
             *o = *m;
             return;
         };
@@ -290,7 +308,7 @@ pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
             let rest = (speed - supplied).clamp(-speed, speed);
             let back = f / speed * rest;
             let p = Vec2::new((q % prev.w) as f32, (q / prev.w) as f32) - back;
-            if let Some(from) = warped_from(src, prev, p, dt, c) {
+            if let Some(from) = warped_from(inp.src, prev, p, dt, c, inp.max_step) {
                 (m, best_i, x, y) = from;
             } else {
                 let (dx, dy) = m.rotate(back.x, back.y);

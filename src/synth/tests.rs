@@ -329,3 +329,63 @@ fn paint_inside_the_shape_comes_from_inside_the_exemplars_paint() {
     assert!(inside > 4 * 2500, "{inside} pixels checked");
     assert_eq!(outside, 0, "{outside} pixels inside the target matched outside the exemplar's paint ({inside} inside)");
 }
+
+/// SHIFTNNF of a uniform field — every pixel of a 40 × 40 window matched to exemplar frame 5
+/// at (44, 32) of the 8-frame [`disc_exemplar`], receding (`flip`) or not — deep inside the
+/// target (20 px from its edge, b = 6), moving `speed` px a frame along x, with the target's
+/// extent growing by `dt`: the exemplar frame of every shifted match.
+fn shifted_frames(flip: bool, speed: f32, dt: f32, receding_hold: bool, max_step: usize) -> Vec<u16> {
+    let (rgb, g) = disc_exemplar(64, 64, 8, 1);
+    let params = Params::builder().build().unwrap();
+    let source = Source::from_parts(&rgb, &g, &params, 6.0).unwrap();
+    let src = &source.pyramid.levels[0];
+    let (w, h) = (40, 40);
+    let mut prev = Nnf::new(w, h);
+    for m in prev.data.iter_mut() {
+        *m = nnf::Match { x: 44.0, y: 32.0, i: 5, flip, ok: true, ..nnf::Match::NONE };
+    }
+    let n = w * h;
+    let (zero, grown, flow) = (vec![0.0f32; n], vec![dt; n], vec![Vec2::new(speed, 0.0); n]);
+    let inp = shift::ShiftInputs {
+        src,
+        ext_prev: &zero,
+        ext_cur: &grown,
+        flow_prev: &flow,
+        flow_cur: &flow,
+        dist_cur: &vec![20.0; n],
+        band: 6.0,
+        step_cost: shift::step_cost(source.pyramid.ext_scale, src.frames),
+        active: &vec![true; n],
+        carry_new: true,
+        time_shift: true,
+        advect: true,
+        settle: false,
+        receding_hold,
+        hold_time: false,
+        max_step,
+        turn: false,
+    };
+    shift::shift_nnf(&inp, &prev).data.iter().filter(|m| m.ok).map(|m| m.i).collect()
+}
+
+/// Where the shape moves rather than grows (`ParamsBuilder::pace`) a match steps at most one
+/// exemplar frame per target frame, however far the target's extent moved — both its own
+/// step and that of the match the advection takes from behind it; without the bound (the
+/// paper's rule), the same extent change runs it through several frames at once.
+#[test]
+fn a_moving_shape_steps_one_exemplar_frame_at_a_time() {
+    for speed in [0.0, 1.0] {
+        let paced = shifted_frames(false, speed, 12.0, true, 1);
+        assert!(!paced.is_empty() && paced.iter().all(|&i| i == 5 || i == 6), "paced, speed {speed}: {paced:?}");
+        let free = shifted_frames(false, speed, 12.0, true, usize::MAX);
+        assert!(free.iter().all(|&i| i > 6), "the paper's rule jumps, speed {speed}: {free:?}");
+        // Receding (the hold off, else it holds deep inside): at most one frame back.
+        let back = shifted_frames(true, speed, 6.0, false, 1);
+        assert!(back.iter().all(|&i| i == 4 || i == 5), "paced back, speed {speed}: {back:?}");
+        let free = shifted_frames(true, speed, 6.0, false, usize::MAX);
+        assert!(free.iter().all(|&i| i < 4), "the paper's rule runs back, speed {speed}: {free:?}");
+    }
+    // Receding paint deeper than b keeps its frame where it is its pixel's own match
+    // (`ParamsBuilder::receding_hold`).
+    assert!(shifted_frames(true, 0.0, 6.0, true, usize::MAX).iter().all(|&i| i == 5));
+}
