@@ -590,7 +590,7 @@ impl ParamsBuilder {
     /// spreads onto new paper where a shape only moves, so its paint ages at the exemplar's own
     /// pace; a growing shape keeps the paper's rule (its front is new paint). Measured on a
     /// 14-px limb swinging at up to 11 px a frame (ink-rims, 24 frames, 512²): carried matches
-    /// stepped 3–6 exemplar frames in a frame at its tip, and their distance from the exemplar's
+    /// stepped 2–6 exemplar frames in a frame at its tip, and their distance from the exemplar's
     /// edge after re-anchoring was 6–12 px where the target's was 2. With the pace, on the
     /// 24-frame quality suite (seeds 1 and 2): incoherent change of the five video exemplars'
     /// limbs 1.86 → 1.65 and 1.81 → 1.58 on average, of the whole suite 0.849 → 0.800 and
