@@ -198,16 +198,9 @@ fn spin_of(f: &Nnf) -> Vec<(f32, f32)> {
             if o.is_some() {
                 continue;
             }
-            let (x, y) = (q % w, q / w);
             let (mut c, mut s) = (0.0f32, 0.0f32);
-            for (dx, dy) in [(-1isize, 0isize), (1, 0), (0, -1), (0, 1)] {
-                let (nx, ny) = (x as isize + dx, y as isize + dy);
-                if nx >= 0
-                    && ny >= 0
-                    && (nx as usize) < w
-                    && (ny as usize) < h
-                    && let Some((nc, ns)) = prev[ny as usize * w + nx as usize]
-                {
+            for (n, _) in neighbours4(q % w, q / w, w, h) {
+                if let Some((nc, ns)) = prev[n] {
                     (c, s) = (c + nc, s + ns);
                 }
             }
@@ -218,6 +211,16 @@ fn spin_of(f: &Nnf) -> Vec<(f32, f32)> {
         }
     }
     spin.into_iter().map(|o| o.unwrap_or((1.0, 0.0))).collect()
+}
+
+/// The 4-neighbours of pixel (x, y) that lie inside a `w × h` grid, left, right, up, down:
+/// each as its row-major index and its offset from (x, y).
+fn neighbours4(x: usize, y: usize, w: usize, h: usize) -> impl Iterator<Item = (usize, (isize, isize))> {
+    [(-1isize, 0isize), (1, 0), (0, -1), (0, 1)].into_iter().filter_map(move |(dx, dy)| {
+        let (nx, ny) = (x as isize + dx, y as isize + dy);
+        (nx >= 0 && ny >= 0 && (nx as usize) < w && (ny as usize) < h)
+            .then(|| (ny as usize * w + nx as usize, (dx, dy)))
+    })
 }
 
 /// The field a level starts from. At the coarsest level: the shifted field (or a random one
@@ -408,13 +411,8 @@ fn repair(ctx: &Ctx, nnf: &mut Nnf) {
                 continue;
             }
             let seg = ctx.wanted_segment(q);
-            let from = [(-1isize, 0isize), (1, 0), (0, -1), (0, 1)];
-            let propagated = from.iter().find_map(|&(dx, dy)| {
-                let (nx, ny) = (x as isize + dx, y as isize + dy);
-                if nx < 0 || ny < 0 || nx >= w as isize || ny >= h as isize {
-                    return None;
-                }
-                let n = before[ny as usize * w + nx as usize];
+            let propagated = neighbours4(x, y, w, h).find_map(|(k, (dx, dy))| {
+                let n = before[k];
                 if !n.ok {
                     return None;
                 }

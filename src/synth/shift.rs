@@ -183,26 +183,20 @@ fn carried_in(inp: &ShiftInputs, prev: &Nnf, q: usize, c: f32) -> Option<Match> 
         }
     }
     let dt = inp.ext_cur[q] - inp.ext_prev[q];
-    let (m, i, x, y) = warped_from(inp.src, prev, p, dt, c, inp.max_step)?;
+    let (m, i, x, y) = warped_from(inp, prev, p, dt, c)?;
     Some(placed(inp, q, m, i, x, y))
 }
 
 /// The previous frame's match nearest to `p` (at `⌊p⌉`), time-shifted under the extent change
-/// `dt` ([`time_step`], at most `max_step` frames), and the point it stands for at `p`: its
-/// position offset by `M·(p − ⌊p⌉)`. `None` where `⌊p⌉` is off the field or had no match.
-fn warped_from(
-    src: &SourceLevel,
-    prev: &Nnf,
-    p: Vec2,
-    dt: f32,
-    c: f32,
-    max_step: usize,
-) -> Option<(Match, usize, f32, f32)> {
+/// `dt` ([`time_step`], at most [`ShiftInputs::max_step`] frames), and the point it stands for
+/// at `p`: its position offset by `M·(p − ⌊p⌉)`. `None` where `⌊p⌉` is off the field or had no
+/// match.
+fn warped_from(inp: &ShiftInputs, prev: &Nnf, p: Vec2, dt: f32, c: f32) -> Option<(Match, usize, f32, f32)> {
     let m = prev.data[prev.index_near(p)?];
     if !m.ok {
         return None;
     }
-    let (i, _) = time_step(src, &m, dt, c, max_step)?;
+    let (i, _) = time_step(inp.src, &m, dt, c, inp.max_step)?;
     let r = p.round();
     let (dx, dy) = m.rotate(p.x - r.x, p.y - r.y);
     Some((m, i, m.x + dx, m.y + dy))
@@ -308,7 +302,7 @@ pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
             let rest = (speed - supplied).clamp(-speed, speed);
             let back = f / speed * rest;
             let p = Vec2::new((q % prev.w) as f32, (q / prev.w) as f32) - back;
-            if let Some(from) = warped_from(inp.src, prev, p, dt, c, inp.max_step) {
+            if let Some(from) = warped_from(inp, prev, p, dt, c) {
                 (m, best_i, x, y) = from;
             } else {
                 let (dx, dy) = m.rotate(back.x, back.y);
