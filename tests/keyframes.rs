@@ -23,6 +23,9 @@ struct Seq {
     size: (usize, usize),
     cov: Box<dyn Fn(usize) -> Plane<f32> + Sync>,
     motion: Option<Motion>,
+    /// The folder of the files drawn from (an SVG sequence reads its frames when drawing),
+    /// removed with the target.
+    _scratch: Option<tempfile::TempDir>,
 }
 
 impl Seq {
@@ -38,7 +41,7 @@ impl Seq {
 /// A generated target: a shape that moves, at the size users run.
 fn target(kind: TargetKind) -> Seq {
     let t = Target::new(kind, SIDE, FRAMES);
-    Seq { frames: FRAMES, size: (SIDE, SIDE), cov: Box::new(move |k| t.coverage(k)), motion: None }
+    Seq { frames: FRAMES, size: (SIDE, SIDE), cov: Box::new(move |k| t.coverage(k)), motion: None, _scratch: None }
 }
 
 /// Layer `layer` of a Lottie animation, frames `range`.
@@ -52,6 +55,7 @@ fn animation(path: &str, layer: &str, range: std::ops::Range<usize>) -> Seq {
         size,
         cov: Box::new(move |k| a.render(r, start + k).unwrap().coverage()),
         motion: Some(Box::new(move |from, to| b.fill_motion_to(r, start + from, start + to).unwrap())),
+        _scratch: None,
     }
 }
 
@@ -356,11 +360,11 @@ fn turning_ball() -> Seq {
                 {"ty": "el", "p": {"a": 0, "k": [0, 0]}, "s": {"a": 0, "k": [150, 150]}},
                 {"ty": "fl", "c": {"a": 0, "k": [0.2, 0.3, 0.8, 1]}, "o": {"a": 0, "k": 100}, "r": 1},
                 tr]}]}]});
-    let dir = std::env::temp_dir().join(format!("fm-keyframes-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("ball.json");
+    let dir = tempfile::Builder::new().prefix("fm-keyframes-").tempdir().unwrap();
+    let path = dir.path().join("ball.json");
     std::fs::write(&path, doc.to_string()).unwrap();
-    animation(path.to_str().unwrap(), "ball", 0..24)
+    let seq = animation(path.to_str().unwrap(), "ball", 0..24);
+    Seq { _scratch: Some(dir), ..seq }
 }
 
 /// Texture moves with the parts: the [`turning_ball`], painted once in the middle, against
@@ -398,9 +402,7 @@ fn turning_ball_svg() -> Seq {
         let u = ((t - k[0].0) / (k[1].0 - k[0].0)).clamp(0.0, 1.0);
         k[0].1 + (k[1].1 - k[0].1) * u
     };
-    let dir = std::env::temp_dir().join(format!("fm-keyframes-svg-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = tempfile::Builder::new().prefix("fm-keyframes-svg-").tempdir().unwrap();
     for i in 0..24 {
         let t = i as f32;
         let (x, y) = (lerp(&[(0.0, 200.0), (23.0, 290.0)], t), lerp(&[(0.0, 210.0), (23.0, 280.0)], t));
@@ -410,9 +412,10 @@ fn turning_ball_svg() -> Seq {
         let svg = format!(
             r##"<svg xmlns="http://www.w3.org/2000/svg" width="512" height="512" viewBox="0 0 512 512"><g id="ball" transform="translate({x} {y}) rotate({r}) scale({sx} {sy})"><circle cx="0" cy="0" r="75" fill="#334dcc"/></g></svg>"##
         );
-        std::fs::write(dir.join(format!("ball{i:02}.svg")), svg).unwrap();
+        std::fs::write(dir.path().join(format!("ball{i:02}.svg")), svg).unwrap();
     }
-    animation(dir.to_str().unwrap(), "ball", 0..24)
+    let seq = animation(dir.path().to_str().unwrap(), "ball", 0..24);
+    Seq { _scratch: Some(dir), ..seq }
 }
 
 /// An SVG sequence gives its elements' motion as the Lottie file gives its transforms': the

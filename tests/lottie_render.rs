@@ -5,7 +5,8 @@ use fluidymation::Error;
 use fluidymation::anim::lottie;
 use fluidymation::anim::{self, LoadOptions, RegionKind};
 use serde_json::{Value, json};
-use std::path::{Path, PathBuf};
+use std::io::Write;
+use std::path::Path;
 
 fn st(v: Value) -> Value {
     json!({"a": 0, "k": v})
@@ -132,24 +133,17 @@ fn track_mattes_alpha_luma_and_tp() {
     assert_eq!(names, ["other", "target"]);
 }
 
-fn write_temp(name: &str, text: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("fm-lottie-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let p = dir.join(name);
-    std::fs::write(&p, text).unwrap();
-    p
+/// `text` in a `.json` file of its own under the temp folder, removed when dropped (panics
+/// included). The reader reads the file once, when loading.
+fn write_temp(text: &str) -> tempfile::NamedTempFile {
+    let mut f = tempfile::Builder::new().prefix("fm-lottie-").suffix(".json").tempfile().unwrap();
+    f.write_all(text.as_bytes()).unwrap();
+    f
 }
 
 fn anim_of(d: &Value, opts: &LoadOptions) -> anim::Animation {
-    let p = write_temp(&format!("a{}.json", rand_name(d)), &d.to_string());
-    anim::load(&p, opts).unwrap()
-}
-
-fn rand_name(d: &Value) -> u64 {
-    use std::hash::{Hash, Hasher};
-    let mut h = std::collections::hash_map::DefaultHasher::new();
-    d.to_string().hash(&mut h);
-    h.finish()
+    let f = write_temp(&d.to_string());
+    anim::load(f.path(), opts).unwrap()
 }
 
 #[test]
@@ -257,8 +251,8 @@ fn scale_option_scales_the_canvas() {
 }
 
 fn load_err(text: &str) -> Error {
-    let p = write_temp(&format!("e{}.json", rand_name(&json!(text))), text);
-    anim::load(&p, &LoadOptions::default()).unwrap_err()
+    let f = write_temp(text);
+    anim::load(f.path(), &LoadOptions::default()).unwrap_err()
 }
 
 #[test]
@@ -330,8 +324,8 @@ fn exponential_precomp_reuse_is_refused_before_drawing() {
     }
     let d = json!({"v": "5.7.1", "fr": 10, "ip": 0, "op": 10, "w": 40, "h": 40, "assets": assets,
         "layers": [{"ty": 0, "nm": "top", "ind": 1, "refId": "c0", "w": 40, "h": 40, "ip": 0, "op": 10, "st": 0, "ks": {}}]});
-    let p = write_temp("exponential.json", &d.to_string());
-    let e = anim::load(&p, &LoadOptions::default()).unwrap_err();
+    let f = write_temp(&d.to_string());
+    let e = anim::load(f.path(), &LoadOptions::default()).unwrap_err();
     assert!(matches!(e, fluidymation::Error::Limit { .. }), "{e}");
     let text = e.to_string();
     assert!(text.contains("layers drawn per frame for layer 'top'") && text.contains("at most 10000"), "{text}");

@@ -2,13 +2,22 @@
 
 use fluidymation::Error;
 use fluidymation::anim::{self, LoadOptions, RegionKind};
-use std::path::PathBuf;
+use std::path::Path;
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("fm-svg-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// An empty folder of one test under the temp folder, removed (with what was written in it)
+/// when dropped, panics included; it derefs to its path.
+struct Dir(tempfile::TempDir);
+
+impl std::ops::Deref for Dir {
+    type Target = Path;
+
+    fn deref(&self) -> &Path {
+        self.0.path()
+    }
+}
+
+fn dir(name: &str) -> Dir {
+    Dir(tempfile::Builder::new().prefix(&format!("fm-svg-{name}-")).tempdir().unwrap())
 }
 
 fn frame(body: &str, w: u32, h: u32) -> String {
@@ -129,7 +138,6 @@ fn pattern_tiles_are_bounded_before_drawing() {
     assert!(matches!(e, Error::Limit { .. }), "{e}");
     let text = e.to_string();
     assert!(text.contains("pattern tile") && text.contains("f1.svg"), "{text}");
-    let _ = std::fs::remove_dir_all(&d);
 }
 
 /// The warnings of the animation and of all its regions.
@@ -334,14 +342,15 @@ fn svg_fill_motion_is_the_elements_step() {
             .collect();
         format!("M{} L{} L{} L{} Z", pts[0], pts[1], pts[2], pts[3])
     };
-    let written = |name: &str, body: &dyn Fn(u32) -> String| {
-        let d = dir(name);
+    // The frames are read again when drawn: their folders live as long as the animations.
+    let (transformed, recomputed) = (dir("motion-transform"), dir("motion-coordinates"));
+    let written = |d: &Path, body: &dyn Fn(u32) -> String| {
         for i in 0..6 {
             std::fs::write(d.join(format!("f{i}.svg")), frame(&body(i), 60, 40)).unwrap();
         }
-        anim::load(&d, &LoadOptions::default()).unwrap()
+        anim::load(d, &LoadOptions::default()).unwrap()
     };
-    let by_transform = written("motion-transform", &|i| {
+    let by_transform = written(&transformed, &|i| {
         let extra = if i == 5 { r##"<rect x="50" y="30" width="3" height="3" fill="#0f0"/>"## } else { "" };
         format!(
             r##"<g id="sq" transform="translate({i} 0)"><rect x="15" y="15" width="10" height="10" fill="#f00" transform="rotate({} 20 20)"/>{extra}</g>"##,
@@ -349,7 +358,7 @@ fn svg_fill_motion_is_the_elements_step() {
         )
     });
     let by_coordinates =
-        written("motion-coordinates", &|i| format!(r##"<g id="sq"><path d="{}" fill="#f00"/></g>"##, corners(i)));
+        written(&recomputed, &|i| format!(r##"<g id="sq"><path d="{}" fill="#f00"/></g>"##, corners(i)));
     for a in [&by_transform, &by_coordinates] {
         let frame = 2;
         let v = a.fill_motion(0, frame).unwrap().expect("the same elements in both frames");

@@ -32,12 +32,6 @@ pub fn animation_json() -> String {
     .to_string()
 }
 
-fn scratch_root() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("fm-resume-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
 /// Every file in `dir` (recursively, relative names), except the resume state.
 pub fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
     fn walk(base: &Path, dir: &Path, out: &mut BTreeMap<String, Vec<u8>>) {
@@ -65,30 +59,22 @@ pub struct Case {
     pub dir: PathBuf,
     pub input: PathBuf,
     pub out: PathBuf,
-    owned: bool,
-}
-
-impl Drop for Case {
-    fn drop(&mut self) {
-        if self.owned {
-            let _ = std::fs::remove_dir_all(&self.dir);
-        }
-    }
+    /// The folder of a case of its own, removed with the case (panics included).
+    _scratch: Option<tempfile::TempDir>,
 }
 
 impl Case {
     /// A case in a folder prepared elsewhere (`blob.json` and `out/`), left in place.
     pub fn at(dir: &Path) -> Case {
-        Case { dir: dir.to_path_buf(), input: dir.join("blob.json"), out: dir.join("out"), owned: false }
+        Case { dir: dir.to_path_buf(), input: dir.join("blob.json"), out: dir.join("out"), _scratch: None }
     }
 
     pub fn new(name: &str) -> Case {
-        let dir = scratch_root().join(name);
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
+        let scratch = tempfile::Builder::new().prefix(&format!("fm-resume-{name}-")).tempdir().unwrap();
+        let dir = scratch.path().to_path_buf();
         let input = dir.join("blob.json");
         std::fs::write(&input, animation_json()).unwrap();
-        Case { out: dir.join("out"), input, dir, owned: true }
+        Case { out: dir.join("out"), input, dir, _scratch: Some(scratch) }
     }
 
     pub fn anim(&self) -> Animation {
