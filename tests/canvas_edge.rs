@@ -59,7 +59,9 @@ fn from_canvas_edge(x: usize, y: usize) -> usize {
 /// 0.72×; −0.057, 1.32× (a dark rim along the canvas); +0.043, 0.88×. Floors: within ±0.03 in
 /// luma (the worst measured, 0.009, plus about 0.02; every value before was outside it) and
 /// contrast 0.8–1.25×. (ink-rims and green-wash showed little of it: +0.001 and +0.020 on
-/// frames written by `synth`, −0.000 and −0.004 now.)
+/// frames written by `synth`, −0.000 and −0.004 now.) With the finest merge's uniformity
+/// (`ParamsBuilder::finest_uniformity`, 2026-12-05): +0.009, 0.95×; +0.000, 0.96×; +0.002,
+/// 0.98×.
 #[test]
 fn a_background_layer_has_no_frame_around_the_canvas() {
     let full = Plane::filled(SIDE, SIDE, true);
@@ -82,7 +84,9 @@ fn a_background_layer_has_no_frame_around_the_canvas() {
 /// its own outline − those ≥ 40 px from both): blue-bloom −0.006, rose-burst −0.002,
 /// yellow-granules +0.008. With the paper-colored padding: +0.053, −0.087, +0.043. Floor:
 /// within ±0.03 (the worst measured, 0.008, plus about 0.02). The disc's own rim keeps its
-/// paint: its 4-px band's mean luma 0.678, 0.815, 0.794 (before: 0.678, 0.813, 0.793).
+/// paint: its 4-px band's mean luma 0.678, 0.815, 0.794 (before: 0.678, 0.813, 0.793). With
+/// the finest merge's uniformity (2026-12-05): −0.006, −0.002, +0.009; the rim 0.678, 0.815,
+/// 0.793.
 #[test]
 fn a_shape_leaving_the_canvas_has_no_edge_there() {
     let inside = |x: usize, y: usize| RADIUS - (x as f32).hypot(y as f32 - SIDE as f32 / 2.0);

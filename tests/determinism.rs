@@ -53,12 +53,12 @@ fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
 /// advection went unseen.
 ///
 /// Update `PINNED` only in a commit that changes the output on purpose, and say so in its
-/// message (the last: where the shape moves rather than grows, a carried match steps at most
-/// one exemplar frame per frame, `ParamsBuilder::pace`, issue 13; before: the first frame
-/// painted a second time from its own result carried onto itself, `Synthesizer::step`).
+/// message (the last: the finest level's merge weighs Ω and the contrast balance,
+/// `ParamsBuilder::finest_uniformity`, issue 13; before: where the shape moves rather than
+/// grows, a carried match steps at most one exemplar frame per frame, `ParamsBuilder::pace`).
 #[test]
 fn engine_output_is_pinned() {
-    const PINNED: u64 = 0x77f3_93f2_5fd7_ad1d;
+    const PINNED: u64 = 0xf5da_5b61_0329_4e17;
     let demo = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/demo/waving.json");
     let a = anim::load(&demo, &LoadOptions::default().scale(0.5)).unwrap();
     let out = std::env::temp_dir().join(format!("fm-pinned-{}", std::process::id()));

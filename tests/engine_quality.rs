@@ -214,7 +214,9 @@ fn no_wash_out_and_exemplar_colors() {
     // interior (Params::extent_falloff); here, at 100 px, that happens at the two finest
     // levels only. Measured: still 1.039 (0.891 without the falloff), growing 1.034, sliding
     // 0.995; the still's palette 0.004 (the table `row` prints). Before the tone match: still
-    // 1.00 (0.83 without the falloff), growing 1.06, sliding 0.97.
+    // 1.00 (0.83 without the falloff), growing 1.06, sliding 0.97. With the finest merge's
+    // uniformity (`ParamsBuilder::finest_uniformity`, 2026-12-05): still 1.050 (0.890 without
+    // the falloff), growing 1.023, sliding 1.015; the still's palette 0.004.
     for (what, n, min) in [("still", still, 0.5), ("growing", growing, 0.7), ("sliding", sliding, 0.7)] {
         assert!(n.contrast >= min, "{what}: contrast ratio {} < {min}", n.contrast);
         assert!(n.palette < 0.06, "{what}: palette distance {}", n.palette);
@@ -231,7 +233,8 @@ fn still_target_is_temporally_coherent() {
     // without both the paint boils. Measured (temporal change ratio): full 0.240, without the
     // temporal term 0.231, without the carried estimate 0.321, without both 1.566 (4.9× the
     // largest of the three; floor 3×). Before the tone match: 0.184, 0.176, 0.253 and 1.276
-    // (5.0×).
+    // (5.0×). With the finest merge's uniformity (2026-12-05): 0.102, 0.082, 0.146 and 0.944
+    // (6.5×).
     let (none, _, _) = row("neither");
     let (no_temp, _, _) = row("no temporal");
     let (no_est, _, _) = row("no carried estimate");
@@ -256,7 +259,8 @@ fn boundary_term_carries_the_rim() {
     // term, 0.057 without). Measured (edge darkening, growing and sliding, no tone match):
     // 0.069 and 0.037 with the term, 0.069 and 0.023 without. The sliding ellipse, whose rim
     // the term must carry along, keeps at least 0.01 more (+0.014), and the growing one loses
-    // nothing with it (the same 0.069).
+    // nothing with it (the same 0.069). With the finest merge's uniformity (2026-12-05): 0.064
+    // and 0.048 with the term, 0.056 and 0.022 without (sliding +0.026, growing +0.008).
     let (_, g, l) = row("no tone match");
     let (_, g0, l0) = row("no boundary term, no tone match");
     let what = format!("rim with {:?} without {:?}", (g.rim, l.rim), (g0.rim, l0.rim));
@@ -270,7 +274,9 @@ fn tone_match_gives_the_band_the_exemplars_density() {
     // (edge darkening, still, growing, sliding): 0.074, 0.067, 0.059 with it; 0.054, 0.069,
     // 0.037 without. The still and the sliding ellipse keep at least 0.01 more (+0.020,
     // +0.022), the growing one, whose band the search already fills with rim paint, within
-    // 0.005 (−0.002), and the colors stay the exemplar's (still palette 0.004 both ways).
+    // 0.005 (−0.002), and the colors stay the exemplar's (still palette 0.004 both ways). With
+    // the finest merge's uniformity (2026-12-05): 0.075, 0.066, 0.072 with it; 0.053, 0.064,
+    // 0.048 without (+0.022, +0.002, +0.024; palette 0.004 both ways).
     let (s, g, l) = row("full");
     let (s0, g0, l0) = row("no tone match");
     let what = format!("rim with {:?} without {:?}", (s.rim, g.rim, l.rim), (s0.rim, g0.rim, l0.rim));
@@ -431,7 +437,8 @@ fn flow_alignment(samples: &[FieldSample]) -> f32 {
 }
 
 /// Measured on the sliding ellipse's last frame: 0.0000 of the matches in the other segment
-/// with segments, 0.0445 without. Floors: at most 0.01 with, and 0.015 more without.
+/// with segments, 0.0445 without. Floors: at most 0.01 with, and 0.015 more without. With the
+/// finest merge's uniformity (2026-12-05): 0.0000 and 0.0421.
 #[test]
 fn segments_keep_border_paint_at_the_border() {
     let masks = sliding();
@@ -446,7 +453,8 @@ fn segments_keep_border_paint_at_the_border() {
 /// Measured on the sliding ellipse's last frame: mean |cos| 0.878 with the rule, 0.647 without
 /// (a random direction gives 2/π ≈ 0.64). Floors: 0.85 with (0.03 below the measured), and
 /// 0.2 more than without (measured 0.23 more). A stronger border channel costs it first
-/// (`--dist-weight` 20: 0.846; README, *Known limitations*).
+/// (`--dist-weight` 20: 0.846; README, *Known limitations*). With the finest merge's
+/// uniformity (2026-12-05): 0.893 with the rule, 0.618 without.
 #[test]
 fn direction_rule_turns_the_spreading_to_face_the_motion() {
     let masks = sliding();

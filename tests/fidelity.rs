@@ -35,8 +35,12 @@ fn suite(options: SuiteOptions) -> SuiteReport {
 /// `shift`, `time_step`) the warp moved the identity's interior matches by the extent's bias,
 /// and the worst frame was 28.1 dB (28.4 before the carried rim was kept); with the search's
 /// estimate voted with σ = 0.35 instead of 0.5 (Params::estimate_sigma) it fell below 28 (26.6).
-/// Floor: 32 dB, set from the measured 34.2 less 2 dB (above the issue's 28); today's 32.6
-/// leaves 0.6 dB (the output is the same on every machine and thread count).
+/// Floor: 32 dB, set from the measured 34.2 less 2 dB (above the issue's 28); today's 32.9
+/// leaves 0.9 dB (the output is the same on every machine and thread count). Since the finest
+/// level's merge weighs Ω and the contrast balance (`ParamsBuilder::finest_uniformity`,
+/// 2026-12-05): green-wash's worst frame 32.6 → 32.9 dB (frame 9), ink-rims no longer exact
+/// (worst frame 61.8 dB, frame 20), the others unchanged (blue-bloom 61.9, rose-burst 69.1,
+/// yellow-granules exact).
 #[test]
 fn identity_gives_back_the_exemplar_at_full_size() {
     let report = suite(SuiteOptions::default().targets([]).identity(true));
@@ -124,6 +128,11 @@ fn check(what: &str, value: Option<f32>, floor: f32, higher: bool, failures: &mu
 /// edge darkening and palette are now the issue's own (0.85, 0.8, 0.03), 0.11, 0.22 and 0.019
 /// under the measured values; the ceiling of incoherent change is the measured 0.95 plus 0.04
 /// (it was 0.88; the issue's is 1.2); motion 0.55 against 0.62.
+///
+/// With the finest level's merge weighing Ω and the contrast balance
+/// (`ParamsBuilder::finest_uniformity`, 2026-12-05; printed table): contrast 0.95–1.06, edge
+/// darkening 1.01–1.22, palette 0.008–0.011, incoherent change 0.54–0.93 (blue-bloom growing,
+/// 0.06 under the ceiling), motion 0.62–0.68, IoU α 0.996–0.997.
 #[test]
 fn moving_targets_keep_the_rim_texture_and_coherence() {
     let report = suite(
@@ -180,6 +189,11 @@ fn moving_targets_keep_the_rim_texture_and_coherence() {
 /// 0.86/0.72): then 0.03/0.07 and 0.03/0.13 above them. With the tone match (`synth::tone`,
 /// the default since): ink-rims 0.96 and 0.98, blue-bloom 0.91 and 1.01; whole run contrast
 /// 0.87 and 0.86, edge darkening 1.41 and 1.39 (0.05/0.05 and 0.05/0.29 above the floors).
+/// With the finest level's merge weighing Ω and the contrast balance
+/// (`ParamsBuilder::finest_uniformity`, 2026-12-05): ink-rims 1.03 and 0.96, blue-bloom 0.97
+/// and 1.03 (every later window's contrast above the first's but one each); whole run
+/// contrast 0.98 and 0.89, edge darkening 1.38 and 1.32 (0.12/0.03 and 0.11/0.31 above the
+/// floors).
 #[test]
 fn long_target_keeps_its_paint_in_every_window() {
     let report = suite(
@@ -252,6 +266,14 @@ fn long_target_keeps_its_paint_in_every_window() {
 /// 0.63. The carried rim still holds the rim; the lowest window's contrast it used to add
 /// (+0.04) is gone, so that floor is now that it costs none (at least the run without it less
 /// 0.02).
+///
+/// Since the finest level's merge weighs Ω and the contrast balance
+/// (`ParamsBuilder::finest_uniformity`, 2026-12-05), the calm up-scaled matches no longer win
+/// there for nothing, with or without the carried rim, so the run without it keeps more of its
+/// rim: rim 0.99 against 0.88 without the carried rim (+0.11), lowest window's contrast 0.92
+/// against 0.89 without the carried rim and 0.89 without settling, whole run 0.77 against 0.73
+/// without settling. The rim floor is now +0.05 over the run without the carried rim (it was
+/// +0.15; measured +0.11), and still at least 0.85 of the first window's in every window.
 #[test]
 fn carried_rim_and_settled_field_keep_the_paint_of_a_long_target() {
     let run = |params: Params| {
@@ -280,9 +302,51 @@ fn carried_rim_and_settled_field_keep_the_paint_of_a_long_target() {
          settling; whole run's contrast {whole:.2}, {whole_unsettled:.2} without settling"
     );
     println!("{what}");
-    assert!(rim >= 0.85 && rim >= rim_merged + 0.15, "{what}");
+    assert!(rim >= 0.85 && rim >= rim_merged + 0.05, "{what}");
     assert!(contrast >= contrast_merged - 0.02, "{what}");
     assert!(whole >= whole_unsettled + 0.02, "{what}");
+}
+
+/// The finest level's merge weighs Ω and the contrast balance (`ParamsBuilder::
+/// finest_uniformity`, on by default), which keeps a long target's interior from settling on
+/// the exemplar's calmest paint: weighed by the patch error alone, the up-scaled matches that
+/// replace a few per cent of the carried ones every frame were calmer than what they replaced.
+/// On the long target at half size, green-wash (the exemplar whose texture fell most).
+///
+/// Measured (`quality -e green-wash --target long --scale 0.5`, and with `--without
+/// finest-uniformity`; 2026-12-05): whole run's contrast 0.811 against 0.757, the lowest
+/// window's ÷ the first 0.950 against 0.904, its rim 0.982 against 0.943. The other video
+/// exemplars alike (whole run's contrast, lowest window ÷ first): yellow-granules 0.868 against
+/// 0.846 and 0.952 against 0.931, blue-bloom 0.889 against 0.849 and 0.968 against 0.928,
+/// ink-rims 0.977 against 0.858 and 1.034 against 0.957, rose-burst 0.903 against 0.861 and
+/// 1.000 against 0.981 (its rim 0.935 against 0.888). Floors: the whole run's contrast at least
+/// 0.03 higher with it (measured +0.054), the lowest window ÷ the first at least 0.02 higher
+/// (measured +0.046) and at least the issue's 0.9 (measured 0.950).
+#[test]
+fn finest_merge_uniformity_keeps_the_texture_of_a_long_target() {
+    let run = |on: bool| {
+        let report = suite(
+            SuiteOptions::default()
+                .exemplars(["green-wash"])
+                .targets([TargetKind::Long])
+                .identity(false)
+                .scale(0.5)
+                .params(Params::builder().finest_uniformity(on).build().unwrap()),
+        );
+        let row = &report.rows[0];
+        assert_eq!(row.windows.len(), 6);
+        let lowest =
+            row.windows.iter().map(|w| w.contrast_vs_first.unwrap_or(f32::NEG_INFINITY)).fold(f32::INFINITY, f32::min);
+        (row.summary.contrast_ratio.unwrap_or(0.0), lowest)
+    };
+    let ((whole, lowest), (whole_off, lowest_off)) = (run(true), run(false));
+    let what = format!(
+        "whole run's contrast {whole:.3}, {whole_off:.3} without the finest merge's uniformity; lowest \
+         window ÷ first {lowest:.3}, {lowest_off:.3} without"
+    );
+    println!("{what}");
+    assert!(whole >= whole_off + 0.03, "{what}");
+    assert!(lowest >= lowest_off + 0.02 && lowest >= 0.9, "{what}");
 }
 
 /// The extent falloff (`Params::extent_falloff`, on by default) gives a still shape's interior
@@ -304,6 +368,10 @@ fn carried_rim_and_settled_field_keep_the_paint_of_a_long_target() {
 /// least 0.04 (measured +0.06 and +0.11; +0.061 and +0.112 before the tone match, +0.11 and
 /// +0.14 before the balance, when this floor was 0.07) to at least 0.8 (0.89; 0.852 before the
 /// tone match), and does not move the palette away from the exemplar's by more than 0.005.
+/// With the finest level's merge weighing Ω and the contrast balance
+/// (`ParamsBuilder::finest_uniformity`, 2026-12-05; printed table): contrast green-wash 0.89
+/// against 0.83, yellow-granules 0.96 against 0.86 (+0.06 and +0.10); palette 0.0306 against
+/// 0.0303 and 0.0158 against 0.0245.
 #[test]
 fn extent_falloff_gives_still_interiors_the_exemplar_texture() {
     let run = |falloff: bool| {
@@ -348,7 +416,10 @@ fn extent_falloff_gives_still_interiors_the_exemplar_texture() {
 /// (`synth::pyramid`), the identity no longer needs the term: worst frame 34.0 dB with it,
 /// 39.3 without, median 84.8 and 100 (the identity's own floors, `identity_gives_back_the_
 /// exemplar_at_full_size`, hold either way). Floor: the mean palette distance with the term at
-/// most 0.75× the one without (measured 0.65×).
+/// most 0.75× the one without (measured 0.65×). With the finest level's merge weighing Ω and
+/// the contrast balance (`ParamsBuilder::finest_uniformity`, 2026-12-05; printed table):
+/// 0.0064, 0.0132, 0.0110, 0.0091 against 0.0119, 0.0240, 0.0146, 0.0112 — mean 0.0099
+/// against 0.0154 (0.64×); ink-rims' growing coverage 0.975 against 0.953.
 #[test]
 fn extent_term_tells_the_paint_s_age() {
     let palette = |w_ext: f32| {
@@ -391,6 +462,12 @@ fn extent_term_tells_the_paint_s_age() {
 /// The runs are made without the tone match (`synth::tone`), which corrects the pale paint
 /// the coarse levels pick as it corrects any other: with it (the default) the two are close —
 /// two levels closer on 5 of the 10 runs of seeds 1 and 2, mean 0.042 against 0.047.
+///
+/// With the finest level's merge weighing Ω and the contrast balance
+/// (`ParamsBuilder::finest_uniformity`, 2026-12-05; seed 1, printed): blue-bloom 0.042 against
+/// 0.086, green-wash 0.075 against 0.130, ink-rims 0.058 against 0.032, rose-burst 0.055
+/// against 0.110, yellow-granules 0.034 against 0.075 (two levels closer on four, mean 0.053
+/// against 0.087, 0.61×; at most 0.075).
 #[test]
 fn thin_parts_take_the_exemplar_colors_at_their_depths() {
     let videos = ["blue-bloom", "green-wash", "ink-rims", "rose-burst", "yellow-granules"];

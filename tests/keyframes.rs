@@ -239,7 +239,10 @@ fn lowest_contrast(r: &Report, keys: &[usize]) -> (usize, f32) {
 /// 0.0260 (0.23), motion 0.70. With the tone match (off in `keyframes::paint`, but on in the
 /// paintings and the frames painted alone): translating — 0.957 (frame 16), 0.0057 against
 /// 0.0300 (0.19), motion 0.64, whole translation 0.99 (alone 0.25); growing — 0.959 (frame 22),
-/// 0.0062 against 0.0334 (0.19), motion 0.70.
+/// 0.0062 against 0.0334 (0.19), motion 0.70. With the finest level's merge weighing Ω and the contrast balance
+/// (`ParamsBuilder::finest_uniformity`, 2026-12-05): translating — 0.954 (frame 4), 0.0059 against 0.0288
+/// (0.20), motion 0.63, whole translation 0.99 (alone 0.32); growing — 0.936 (frame 24),
+/// 0.0061 against 0.0314 (0.19), motion 0.70.
 /// Floors: PSNR at the keyframe ≥ 35 dB (it is the painting: the 100 dB cap), contrast ≥ 0.8 (the issue's),
 /// coherence ≤ 0.25 (the issue's), motion ≥ 0.58 (the lowest 0.63 less 0.05); against the
 /// whole translation ≥ 0.9 (0.99 less 0.09) carried and ≤ 0.5 painted alone (0.19 plus 0.31:
@@ -291,7 +294,9 @@ fn one_keyframe_is_carried_forward_and_backward() {
 /// match: contrast ≥ 0.945 (frame 5); the later painting's share 0.05 → 0.98 (first quarter
 /// 0.05–0.22, last 0.86–0.98), never falling; incoherent change 0.0076. With the tone match (in
 /// the paintings): contrast ≥ 0.968 (frame 5); share 0.05 → 0.99 (first quarter 0.05–0.22,
-/// last 0.87–0.99), never falling; incoherent change 0.0080. Floors: contrast ≥ 0.8 (the
+/// last 0.87–0.99), never falling; incoherent change 0.0080. With the finest level's merge weighing Ω and the contrast balance
+/// (`ParamsBuilder::finest_uniformity`, 2026-12-05): contrast ≥ 0.981 (frame 5); share 0.05 → 0.98 (first
+/// quarter 0.05–0.22, last 0.87–0.98), never falling; incoherent change 0.0084. Floors: contrast ≥ 0.8 (the
 /// issue's); the later painting's share below 0.2 on average in the first quarter of the frames
 /// between and above 0.8 in the last, and falling by no more than 0.03 from a frame to the next.
 #[test]
@@ -375,6 +380,9 @@ fn turning_ball() -> Seq {
 /// what that misses (0.98 without the turn); painted frame by frame 0.30 (0.26 with the engine
 /// of 2026-12-04, before the tone match; carried 0.985 and 0.873 as before). With the tone match
 /// (in the painting): carried 0.984, along the masks' motion 0.874, painted alone 0.338.
+/// With the finest level's merge weighing Ω and the contrast balance
+/// (`ParamsBuilder::finest_uniformity`, 2026-12-05): carried 0.979, along the masks' motion 0.872, painted
+/// alone 0.416.
 /// Floors: carried ≥ 0.9 (0.98 less 0.08; the 0.7), at least 0.05 above the masks'
 /// carry (0.11 measured), painted alone ≤ 0.55 (0.30 plus 0.25: the measure tells the two
 /// apart).

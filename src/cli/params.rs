@@ -108,7 +108,10 @@ pub struct SynthFlags {
     /// in the paper, instead of keeping the carried one unless the other is four times
     /// better), carried-estimate (the merge of the
     /// carried and the up-scaled field judges both against an estimate voted from the
-    /// up-scaled field instead of the carried one), settle (the shifted field is not
+    /// up-scaled field instead of the carried one), finest-uniformity (the finest level's
+    /// merge compares patch errors alone, without the uniformity penalty and the contrast
+    /// balance: over hundreds of frames the interior settles on the exemplar's calmest
+    /// paint), settle (the shifted field is not
     /// settled onto its pieces: each carried match keeps the position its own warp gave it),
     /// receding-hold (receding paint runs its exemplar time backwards deep inside the shape
     /// too, as in the paper, instead of only within the border band), pace (a moving shape's
@@ -139,6 +142,7 @@ pub enum Part {
     ExtentFalloff,
     CarriedRim,
     CarriedEstimate,
+    FinestUniformity,
     Settle,
     RecedingHold,
     Pace,
@@ -239,6 +243,7 @@ impl SynthFlags {
                 Part::ExtentFalloff => b.extent_falloff(false),
                 Part::CarriedRim => b.carried_rim(false),
                 Part::CarriedEstimate => b.carried_estimate(false),
+                Part::FinestUniformity => b.finest_uniformity(false),
                 Part::Settle => b.settle(false),
                 Part::RecedingHold => b.receding_hold(false),
                 Part::Pace => b.pace(false),
@@ -444,6 +449,7 @@ mod tests {
         let all_on = SynthFlags { without: Vec::new(), ..flags }.params().unwrap().to_builder();
         let off = all_on.direction_rule(false).time_shift(false).segments(false).advect(false);
         let off = off.ext_normalize(false).extent_falloff(false).carried_rim(false).carried_estimate(false);
+        let off = off.finest_uniformity(false);
         let off = off.settle(false).receding_hold(false).pace(false).contrast_balance(0.0).grain_phase(false);
         let off = off.tone_match(false).repaint_first(false).turn(false).build().unwrap();
         assert_eq!(p, off);

@@ -262,7 +262,7 @@ fn initial_field(
         // from the up-scaled field.
         let voted = if p.parts.carried_estimate { lv.estimate(&completed(&pd, &up), st) } else { lv.estimate(&up, st) };
         write_lanes(tgt, &voted, true);
-        let omega = if lv.finest_vote_only {
+        let omega = if lv.finest_vote_only && !p.parts.finest_uniformity {
             None
         } else {
             timed(&mut st.occurrence, || {
@@ -442,7 +442,9 @@ fn repair(ctx: &Ctx, nnf: &mut Nnf) {
 ///
 /// The finest level merges with the coherence factor κ of the random search
 /// ([`ParamsBuilder::coherence`]): it is only voted, so the merge is the one choice made
-/// there, and the up-scaled challenger gets the same handicap as a random candidate. The
+/// there, and the up-scaled challenger gets the same handicap as a random candidate. Its
+/// errors include Ω and the contrast balance in `ctx`, as every level's do
+/// ([`ParamsBuilder::finest_uniformity`](super::ParamsBuilder::finest_uniformity)). The
 /// coarse levels' estimate is a blur, which a flat, pale exemplar patch fits better than
 /// carried texture; compared at face value, a fifth of the carried matches were replaced
 /// every frame, each by a paler one (measured on green-wash, long target: mean exemplar
