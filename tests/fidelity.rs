@@ -219,6 +219,25 @@ fn long_target_keeps_its_paint_in_every_window() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
+/// Green-wash on the long target at half size with `params`: the lowest later window's rim
+/// and contrast ÷ the first window's, and the whole run's contrast.
+fn long_green_wash(params: Params) -> (f32, f32, f32) {
+    let report = suite(
+        SuiteOptions::default()
+            .exemplars(["green-wash"])
+            .targets([TargetKind::Long])
+            .identity(false)
+            .scale(0.5)
+            .params(params),
+    );
+    let row = &report.rows[0];
+    assert_eq!(row.windows.len(), 6);
+    let min = |f: fn(&quality::Window) -> Option<f32>| {
+        row.windows.iter().map(|w| f(w).unwrap_or(f32::NEG_INFINITY)).fold(f32::INFINITY, f32::min)
+    };
+    (min(|w| w.rim_vs_first), min(|w| w.contrast_vs_first), row.summary.contrast_ratio.unwrap_or(0.0))
+}
+
 /// Keeping the carried rim (`Params::carried_rim`, on by default) is what keeps the rim on a
 /// long target, and settling the shifted field (`Params::settle`, on by default) what keeps
 /// its texture. MERGENNF compared in the border band too, the up-scaled match (placed only as
@@ -276,22 +295,7 @@ fn long_target_keeps_its_paint_in_every_window() {
 /// +0.15; measured +0.11), and still at least 0.85 of the first window's in every window.
 #[test]
 fn carried_rim_and_settled_field_keep_the_paint_of_a_long_target() {
-    let run = |params: Params| {
-        let report = suite(
-            SuiteOptions::default()
-                .exemplars(["green-wash"])
-                .targets([TargetKind::Long])
-                .identity(false)
-                .scale(0.5)
-                .params(params),
-        );
-        let row = &report.rows[0];
-        assert_eq!(row.windows.len(), 6);
-        let min = |f: fn(&quality::Window) -> Option<f32>| {
-            row.windows.iter().map(|w| f(w).unwrap_or(f32::NEG_INFINITY)).fold(f32::INFINITY, f32::min)
-        };
-        (min(|w| w.rim_vs_first), min(|w| w.contrast_vs_first), row.summary.contrast_ratio.unwrap_or(0.0))
-    };
+    let run = long_green_wash;
     let base = || Params::builder().tone_match(false);
     let (rim, contrast, whole) = run(base().build().unwrap());
     let (rim_merged, contrast_merged, _) = run(base().carried_rim(false).build().unwrap());
@@ -324,22 +328,8 @@ fn carried_rim_and_settled_field_keep_the_paint_of_a_long_target() {
 /// (measured +0.046) and at least the issue's 0.9 (measured 0.950).
 #[test]
 fn finest_merge_uniformity_keeps_the_texture_of_a_long_target() {
-    let run = |on: bool| {
-        let report = suite(
-            SuiteOptions::default()
-                .exemplars(["green-wash"])
-                .targets([TargetKind::Long])
-                .identity(false)
-                .scale(0.5)
-                .params(Params::builder().finest_uniformity(on).build().unwrap()),
-        );
-        let row = &report.rows[0];
-        assert_eq!(row.windows.len(), 6);
-        let lowest =
-            row.windows.iter().map(|w| w.contrast_vs_first.unwrap_or(f32::NEG_INFINITY)).fold(f32::INFINITY, f32::min);
-        (row.summary.contrast_ratio.unwrap_or(0.0), lowest)
-    };
-    let ((whole, lowest), (whole_off, lowest_off)) = (run(true), run(false));
+    let run = |on: bool| long_green_wash(Params::builder().finest_uniformity(on).build().unwrap());
+    let ((_, lowest, whole), (_, lowest_off, whole_off)) = (run(true), run(false));
     let what = format!(
         "whole run's contrast {whole:.3}, {whole_off:.3} without the finest merge's uniformity; lowest \
          window ÷ first {lowest:.3}, {lowest_off:.3} without"
