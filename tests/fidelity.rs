@@ -287,9 +287,8 @@ fn long_green_wash(params: Params) -> (f32, f32, f32) {
 /// 0.02).
 ///
 /// Since the finest level's merge weighs Ω and the contrast balance
-/// (`ParamsBuilder::finest_uniformity`, 2026-12-05), the calm up-scaled matches no longer win
-/// there for nothing, with or without the carried rim, so the run without it keeps more of its
-/// rim: rim 0.99 against 0.88 without the carried rim (+0.11), lowest window's contrast 0.92
+/// (`ParamsBuilder::finest_uniformity`, 2026-12-05), the run without the carried rim keeps
+/// more of its rim: rim 0.99 against 0.88 without the carried rim (+0.11), lowest window's contrast 0.92
 /// against 0.89 without the carried rim and 0.89 without settling, whole run 0.77 against 0.73
 /// without settling. The rim floor is now +0.05 over the run without the carried rim (it was
 /// +0.15; measured +0.11), and still at least 0.85 of the first window's in every window.

@@ -755,12 +755,12 @@ impl ParamsBuilder {
     /// contrast at the matched positions 9–16 % lower; yellow-granules on the 300-frame
     /// target), so over hundreds of frames the interior settled on the exemplar's calmest
     /// paint. The contrast balance charges a candidate from a contrast bin the field already
-    /// uses more than the exemplar holds, and Ω one from a spot it already reuses: the calm
-    /// replacement no longer wins for nothing. On the 300-frame target (512², seed 1) the
-    /// contrast of every 50-frame window rose (yellow-granules 0.70–0.85 → 0.76–0.87 of the
-    /// exemplar's, green-wash 0.69–0.80 → 0.74–0.85, blue-bloom 0.75–0.88 → 0.83–0.92,
-    /// ink-rims 0.85–0.95 → 0.95–1.04), with the rim, and the paint changes a little more from
-    /// frame to frame (incoherent change 0.40–0.80 → 0.45–0.89); the README, `quality`. Not in
+    /// uses more than the exemplar holds, and Ω one from a spot it already reuses. On the
+    /// 300-frame target (512², seed 1) the contrast of every 50-frame window rose
+    /// (yellow-granules 0.70–0.85 → 0.76–0.87 of the exemplar's, green-wash 0.69–0.80 →
+    /// 0.74–0.85, blue-bloom 0.75–0.88 → 0.83–0.92, ink-rims 0.85–0.95 → 0.95–1.04), the lowest
+    /// window's rim ÷ the first's 0.91–1.01 → 0.95–1.01 (ink-rims 0.97 → 0.96, the others up),
+    /// and the paint changes a little more from frame to frame (incoherent change 0.40–0.80 → 0.45–0.89); the README, `quality`. Not in
     /// the paper, which does not optimize the finest level and does not say what its merge
     /// weighs. Default: on.
     pub fn finest_uniformity(mut self, on: bool) -> Self {
