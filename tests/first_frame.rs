@@ -49,6 +49,11 @@ fn first_changes(name: &str, params: &Params) -> (f32, f32) {
 /// the jump is still there, so that the floor cannot be met by a change that froze the paint.
 /// With the finest merge's uniformity (`ParamsBuilder::finest_uniformity`, 2026-12-05):
 /// 0.00481 ÷ 0.00341 = 1.4×, 0.00231 ÷ 0.00162 = 1.4×; painted once 3.5× and 3.9×.
+/// With the interior's aging (`ParamsBuilder::aging`, 2026-12-05) the still ellipse's paint
+/// dries on from frame to frame, a steady change in both runs: 0.00545 ÷ 0.00402 = 1.4×,
+/// 0.00436 ÷ 0.00369 = 1.2×; painted once 3.3× and 2.5× (0.01013 ÷ 0.00409) — the jump is
+/// still there, but no longer 2.5× the steady change. Floor now 2.0× either way: painted
+/// twice at most 2.0× (worst 1.4, margin 0.6), painted once more than 2.0× (least 2.5).
 #[test]
 fn the_paint_does_not_jump_after_the_first_frame() {
     let mut failures = Vec::new();
@@ -61,10 +66,10 @@ fn the_paint_does_not_jump_after_the_first_frame() {
             first / next,
             first_once / next_once
         );
-        if first > 2.5 * next {
+        if first > 2.0 * next {
             failures.push(format!("{name}: {first:.5} from frame 1 to 2, {next:.5} from 2 to 3"));
         }
-        if first_once <= 2.5 * next_once {
+        if first_once <= 2.0 * next_once {
             failures.push(format!("{name} painted once: no jump ({first_once:.5}, {next_once:.5})"));
         }
     }

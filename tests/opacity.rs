@@ -56,7 +56,11 @@ fn inner_mean(p: &Plane<Rgb>) -> f32 {
 /// paint is its own look, 0.126 lighter than flat: texture, blooms, and the square's green at 0
 /// floored, `TINT_FLOOR`) and falls at every frame; its texture in linear light is 0.96–1.00 of
 /// the full layer's per unit of opacity. Floors: within opacity × the full layer's difference,
-/// plus 0.01 (0.024–0.122), strictly falling, texture > 0.8. Before (measured with the previous
+/// plus 0.01 (0.024–0.122), strictly falling, texture > 0.6 (0.8 until the interior's paint
+/// aged, `ParamsBuilder::aging`, 2026-12-05: the texture is measured against the last frame's,
+/// and the paint now dries on from frame to frame, so its texture per unit of opacity rises
+/// with the frames, 0.78, 0.79, 0.82, 0.86, 0.89, 0.93, 0.96, 0.98 over frames 2–9; flat
+/// paint would read 0). Before (measured with the previous
 /// build on the same file), the square was absent at frames 2–3 (0.033 and 0.068 from flat) and
 /// at full strength from frame 4 on (0.428 from flat there), the same at every frame after.
 #[test]
@@ -94,12 +98,16 @@ fn a_fading_layer_is_painted_with_its_opacity() {
         (v.iter().map(|x| (x - m).powi(2)).sum::<f32>() / v.len() as f32).sqrt()
     };
     let full = sigma(&painted[9]);
+    let mut thin = Vec::new();
     for (k, frame) in painted.iter().enumerate().take(9).skip(1) {
         let o = a.render(0, k).unwrap().fill.get(100, 100)[3];
         let relative = sigma(frame) / o / full;
         eprintln!("frame {}: opacity {o:.2}, texture {relative:.2} of the full layer's per unit opacity", k + 1);
-        assert!(relative > 0.8, "frame {}: texture {relative:.2} of the full layer's, opacity {o:.2}", k + 1);
+        if relative <= 0.6 {
+            thin.push(format!("frame {}: texture {relative:.2} of the full layer's, opacity {o:.2}", k + 1));
+        }
     }
+    assert!(thin.is_empty(), "{thin:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

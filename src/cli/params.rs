@@ -114,7 +114,11 @@ pub struct SynthFlags {
     /// paint), settle (the shifted field is not
     /// settled onto its pieces: each carried match keeps the position its own warp gave it),
     /// receding-hold (receding paint runs its exemplar time backwards deep inside the shape
-    /// too, as in the paper, instead of only within the border band), pace (a moving shape's
+    /// too, as in the paper, instead of only within the border band), aging (paint deeper
+    /// than the border band steps through the exemplar's frames only as far as the target's
+    /// extents ask, as in the paper: where the shape does not spread, young paint stays young,
+    /// and over a long animation the interior drifts back to the bloom's pale early frames),
+    /// pace (a moving shape's
     /// paint runs through as many exemplar frames per frame as its motion asks, as in the
     /// paper: a fast limb ages its paint several frames at a time and boils), contrast-balance (the
     /// occurrence penalty spreads the use over the exemplar's positions only, as in the paper,
@@ -145,6 +149,7 @@ pub enum Part {
     FinestUniformity,
     Settle,
     RecedingHold,
+    Aging,
     Pace,
     ContrastBalance,
     GrainPhase,
@@ -246,6 +251,7 @@ impl SynthFlags {
                 Part::FinestUniformity => b.finest_uniformity(false),
                 Part::Settle => b.settle(false),
                 Part::RecedingHold => b.receding_hold(false),
+                Part::Aging => b.aging(false),
                 Part::Pace => b.pace(false),
                 Part::ContrastBalance => b.contrast_balance(0.0),
                 Part::GrainPhase => b.grain_phase(false),
@@ -450,7 +456,8 @@ mod tests {
         let off = all_on.direction_rule(false).time_shift(false).segments(false).advect(false);
         let off = off.ext_normalize(false).extent_falloff(false).carried_rim(false).carried_estimate(false);
         let off = off.finest_uniformity(false);
-        let off = off.settle(false).receding_hold(false).pace(false).contrast_balance(0.0).grain_phase(false);
+        let off =
+            off.settle(false).receding_hold(false).aging(false).pace(false).contrast_balance(0.0).grain_phase(false);
         let off = off.tone_match(false).repaint_first(false).turn(false).build().unwrap();
         assert_eq!(p, off);
     }

@@ -635,6 +635,7 @@ fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevS
         advect: p.parts.advect,
         settle: p.parts.settle,
         receding_hold: p.parts.receding_hold,
+        age: p.parts.aging,
         hold_time,
         max_step: if moves && p.parts.pace && p.parts.advect { 1 } else { usize::MAX },
         turn: p.turns(src.levels[0].frames),

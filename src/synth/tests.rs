@@ -333,8 +333,23 @@ fn paint_inside_the_shape_comes_from_inside_the_exemplars_paint() {
 /// SHIFTNNF of a uniform field — every pixel of a 40 × 40 window matched to exemplar frame 5
 /// at (44, 32) of the 8-frame [`disc_exemplar`], receding (`flip`) or not — deep inside the
 /// target (20 px from its edge, b = 6), moving `speed` px a frame along x, with the target's
-/// extent growing by `dt`: the exemplar frame of every shifted match.
+/// extent growing by `dt`: the exemplar frame of every shifted match (the paper's time step:
+/// the interior's aging off).
 fn shifted_frames(flip: bool, speed: f32, dt: f32, receding_hold: bool, max_step: usize) -> Vec<u16> {
+    shifted_frames_at(flip, speed, dt, receding_hold, max_step, false, 20.0)
+}
+
+/// [`shifted_frames`] with the interior's aging on or off (`ParamsBuilder::aging`) and the
+/// target `depth` pixels from its edge.
+fn shifted_frames_at(
+    flip: bool,
+    speed: f32,
+    dt: f32,
+    receding_hold: bool,
+    max_step: usize,
+    age: bool,
+    depth: f32,
+) -> Vec<u16> {
     let (rgb, g) = disc_exemplar(64, 64, 8, 1);
     let params = Params::builder().build().unwrap();
     let source = Source::from_parts(&rgb, &g, &params, 6.0).unwrap();
@@ -352,7 +367,7 @@ fn shifted_frames(flip: bool, speed: f32, dt: f32, receding_hold: bool, max_step
         ext_cur: &grown,
         flow_prev: &flow,
         flow_cur: &flow,
-        dist_cur: &vec![20.0; n],
+        dist_cur: &vec![depth; n],
         band: 6.0,
         step_cost: shift::step_cost(source.pyramid.ext_scale, src.frames),
         active: &vec![true; n],
@@ -361,6 +376,7 @@ fn shifted_frames(flip: bool, speed: f32, dt: f32, receding_hold: bool, max_step
         advect: true,
         settle: false,
         receding_hold,
+        age,
         hold_time: false,
         max_step,
         turn: false,
@@ -388,4 +404,29 @@ fn a_moving_shape_steps_one_exemplar_frame_at_a_time() {
     // Receding paint deeper than b keeps its frame where it is its pixel's own match
     // (`ParamsBuilder::receding_hold`).
     assert!(shifted_frames(true, 0.0, 6.0, true, usize::MAX).iter().all(|&i| i == 5));
+}
+
+/// Paint deeper than the border band ages (`ParamsBuilder::aging`): where the target's extent
+/// does not change, or the shape recedes, a carried match there still steps one exemplar frame
+/// forward a frame — the rule without it holds or runs back — and one that the extents send
+/// further forward keeps its step; within the band the rule is the paper's.
+#[test]
+fn interior_paint_ages_one_frame_at_least() {
+    for speed in [0.0, 1.0] {
+        // Receding deep inside: held without aging (where the pixel keeps its own match; the
+        // match the advection takes from behind runs back), one frame forward with it.
+        let held = shifted_frames_at(true, speed, 6.0, true, 1, false, 20.0);
+        assert!(!held.is_empty() && held.iter().all(|&i| i <= 5), "held or back, speed {speed}: {held:?}");
+        let aged = shifted_frames_at(true, speed, 6.0, true, 1, true, 20.0);
+        assert!(!aged.is_empty() && aged.iter().all(|&i| i == 6), "aged receding, speed {speed}: {aged:?}");
+        // The paper's rule runs receding paint back; aged, it still steps forward.
+        let aged = shifted_frames_at(true, speed, 6.0, false, usize::MAX, true, 20.0);
+        assert!(aged.iter().all(|&i| i == 6), "aged instead of running back, speed {speed}: {aged:?}");
+        // Within the band (2 px from the edge, b = 6) the paper's rule: back.
+        let band = shifted_frames_at(true, speed, 6.0, false, usize::MAX, true, 2.0);
+        assert!(!band.is_empty() && band.iter().all(|&i| i < 5), "band runs back, speed {speed}: {band:?}");
+        // Aligned with a large extent change: the extents' jump is kept.
+        let jump = shifted_frames_at(false, speed, 12.0, true, usize::MAX, true, 20.0);
+        assert!(jump.iter().all(|&i| i > 6), "aged keeps the jump, speed {speed}: {jump:?}");
+    }
 }
