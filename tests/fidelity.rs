@@ -193,6 +193,9 @@ fn moving_targets_keep_the_rim_texture_and_coherence() {
 /// (`ParamsBuilder::finest_uniformity`, 2026-12-05): ink-rims 1.03 and 0.96, blue-bloom 0.97
 /// and 1.03 (every later window's contrast above the first's but one each); whole run
 /// contrast 0.98 and 0.89, edge darkening 1.38 and 1.32 (0.12/0.03 and 0.11/0.31 above the
+/// floors). With the interior's aging (`ParamsBuilder::aging`, 2026-12-05; `quality --target
+/// long --scale 0.5`, seed 1): ink-rims 1.06 and 0.98, blue-bloom 0.92 and 1.01; whole run
+/// contrast 1.00 and 0.89, edge darkening 1.45 and 1.45 (0.15/0.05 and 0.06/0.29 above the
 /// floors).
 #[test]
 fn long_target_keeps_its_paint_in_every_window() {
@@ -292,6 +295,11 @@ fn long_green_wash(params: Params) -> (f32, f32, f32) {
 /// against 0.89 without the carried rim and 0.89 without settling, whole run 0.77 against 0.73
 /// without settling. The rim floor is now +0.05 over the run without the carried rim (it was
 /// +0.15; measured +0.11), and still at least 0.85 of the first window's in every window.
+///
+/// With the interior's aging (`ParamsBuilder::aging`, 2026-12-05; printed): rim 0.97 against
+/// 0.64 without the carried rim (+0.33), lowest window's contrast 0.88 against 0.88 without
+/// the carried rim and 0.88 without settling, whole run 0.74 against 0.71 without settling
+/// (+0.03, floor +0.02).
 #[test]
 fn carried_rim_and_settled_field_keep_the_paint_of_a_long_target() {
     let run = long_green_wash;
@@ -324,7 +332,9 @@ fn carried_rim_and_settled_field_keep_the_paint_of_a_long_target() {
 /// ink-rims 0.977 against 0.858 and 1.034 against 0.957, rose-burst 0.903 against 0.861 and
 /// 1.000 against 0.981 (its rim 0.935 against 0.888). Floors: the whole run's contrast at least
 /// 0.03 higher with it (measured +0.054), the lowest window ÷ the first at least 0.02 higher
-/// (measured +0.046) and at least the 0.9 (measured 0.950).
+/// (measured +0.046) and at least the 0.9 (measured 0.950). With the interior's aging
+/// (`ParamsBuilder::aging`, 2026-12-05; printed): whole run 0.808 against 0.769 (+0.039),
+/// lowest window ÷ first 0.924 against 0.881 (+0.043).
 #[test]
 fn finest_merge_uniformity_keeps_the_texture_of_a_long_target() {
     let run = |on: bool| long_green_wash(Params::builder().finest_uniformity(on).build().unwrap());
@@ -360,7 +370,9 @@ fn finest_merge_uniformity_keeps_the_texture_of_a_long_target() {
 /// With the finest level's merge weighing Ω and the contrast balance
 /// (`ParamsBuilder::finest_uniformity`, 2026-12-05; printed table): contrast green-wash 0.89
 /// against 0.83, yellow-granules 0.96 against 0.86 (+0.06 and +0.10); palette 0.0306 against
-/// 0.0303 and 0.0158 against 0.0245.
+/// 0.0303 and 0.0158 against 0.0245. With the interior's aging (`ParamsBuilder::aging`,
+/// 2026-12-05; printed table): contrast green-wash 0.88 against 0.83, yellow-granules 1.01
+/// against 0.94 (+0.05 and +0.07); palette 0.0195 against 0.0278 and 0.0068 against 0.0156.
 #[test]
 fn extent_falloff_gives_still_interiors_the_exemplar_texture() {
     let run = |falloff: bool| {
@@ -408,7 +420,9 @@ fn extent_falloff_gives_still_interiors_the_exemplar_texture() {
 /// most 0.75× the one without (measured 0.65×). With the finest level's merge weighing Ω and
 /// the contrast balance (`ParamsBuilder::finest_uniformity`, 2026-12-05; printed table):
 /// 0.0064, 0.0132, 0.0110, 0.0091 against 0.0119, 0.0240, 0.0146, 0.0112 — mean 0.0099
-/// against 0.0154 (0.64×); ink-rims' growing coverage 0.975 against 0.953.
+/// against 0.0154 (0.64×); ink-rims' growing coverage 0.975 against 0.953. With the
+/// interior's aging (`ParamsBuilder::aging`, 2026-12-05; printed): 0.0066, 0.0089, 0.0129,
+/// 0.0142 against 0.0170, 0.0107, 0.0205, 0.0158 — mean 0.0106 against 0.0160 (0.66×).
 #[test]
 fn extent_term_tells_the_paint_s_age() {
     let palette = |w_ext: f32| {
