@@ -134,6 +134,8 @@ fn hold_receding(inp: &ShiftInputs, m: &Match, q: usize) -> bool {
 /// [`hold_receding`]), its own frame, supplying no motion — like a time step, it needs its
 /// center inside the exemplar. (The match the advection takes from the pixel behind q,
 /// [`warped_from`], takes its plain time step: the hold is judged at the match's own pixel.)
+/// Then, but for [`ShiftInputs::hold_time`], aged ([`aged`]): deeper than b a held receding
+/// match steps one frame forward too.
 fn step_of(inp: &ShiftInputs, m: &Match, q: usize, dt: f32, c: f32) -> Option<(usize, f32)> {
     if inp.hold_time {
         return inp.src.info_at(m.i as usize, m.x, m.y).map(|_| (m.i as usize, 0.0));
@@ -153,7 +155,7 @@ fn step_of(inp: &ShiftInputs, m: &Match, q: usize, dt: f32, c: f32) -> Option<(u
 /// the paint dries where it lies (the exemplar's interior hardly moves), and the advection
 /// carries all of the target's motion, as for a held match. (Counting the path its paint
 /// travels in that frame instead, as a chosen step does, measured worse: the swinging limb's
-/// incoherent change 0.13–0.18 higher with three of four exemplars, 0.05 lower with ink-rims;
+/// incoherent change 0.12–0.18 higher with three of four exemplars, 0.05 lower with ink-rims;
 /// 24 frames, seed 1.)
 fn aged(inp: &ShiftInputs, m: &Match, q: usize, (best_i, supplied): (usize, f32)) -> (usize, f32) {
     let next = (m.i as usize + 1).min(inp.src.frames - 1);
