@@ -134,13 +134,10 @@ fn hold_receding(inp: &ShiftInputs, m: &Match, q: usize) -> bool {
 /// [`hold_receding`]), its own frame, supplying no motion — like a time step, it needs its
 /// center inside the exemplar. (The match the advection takes from the pixel behind q,
 /// [`warped_from`], takes its plain time step: the hold is judged at the match's own pixel.)
-/// Then, but for [`ShiftInputs::hold_time`], aged ([`aged`]): deeper than b a held receding
-/// match steps one frame forward too.
+/// Then aged ([`aged`], which leaves [`ShiftInputs::hold_time`]'s matches alone): deeper than
+/// b a held receding match steps one frame forward too.
 fn step_of(inp: &ShiftInputs, m: &Match, q: usize, dt: f32, c: f32) -> Option<(usize, f32)> {
-    if inp.hold_time {
-        return inp.src.info_at(m.i as usize, m.x, m.y).map(|_| (m.i as usize, 0.0));
-    }
-    let step = if hold_receding(inp, m, q) {
+    let step = if inp.hold_time || hold_receding(inp, m, q) {
         inp.src.info_at(m.i as usize, m.x, m.y).map(|_| (m.i as usize, 0.0))
     } else {
         time_step(inp.src, m, dt, c, inp.max_step)
