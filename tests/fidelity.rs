@@ -300,6 +300,15 @@ fn long_green_wash(params: Params) -> (f32, f32, f32) {
 /// 0.64 without the carried rim (+0.33), lowest window's contrast 0.88 against 0.88 without
 /// the carried rim and 0.88 without settling, whole run 0.74 against 0.71 without settling
 /// (+0.03, floor +0.02).
+///
+/// With the rim band aged too (`ParamsBuilder::aging` at every depth, 2026-12-05; printed):
+/// rim 0.85 against 0.71 without the carried rim (+0.14), lowest window's contrast 0.87
+/// against 0.86 without the carried rim and 0.86 without settling, whole run 0.76 against
+/// 0.73 without settling. The rim now settles as green-wash's own does — its band is 0.31
+/// luma darker than its interior at frame 3, 0.25 at frame 10 and 0.19 from frame 22 on —
+/// while the first window's rim is still young: the windows' rim 0.90, 0.93, 0.81, 0.79,
+/// 0.76, 0.78 of the exemplar's mean (before: 0.87, 0.89, 0.85, 0.86, 1.02, 1.02). The rim
+/// floor is now 0.80 of the first window's (measured 0.85); the carried rim's +0.05 stays.
 #[test]
 fn carried_rim_and_settled_field_keep_the_paint_of_a_long_target() {
     let run = long_green_wash;
@@ -313,7 +322,7 @@ fn carried_rim_and_settled_field_keep_the_paint_of_a_long_target() {
          settling; whole run's contrast {whole:.2}, {whole_unsettled:.2} without settling"
     );
     println!("{what}");
-    assert!(rim >= 0.85 && rim >= rim_merged + 0.05, "{what}");
+    assert!(rim >= 0.80 && rim >= rim_merged + 0.05, "{what}");
     assert!(contrast >= contrast_merged - 0.02, "{what}");
     assert!(whole >= whole_unsettled + 0.02, "{what}");
 }

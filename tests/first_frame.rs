@@ -54,8 +54,15 @@ fn first_changes(name: &str, params: &Params) -> (f32, f32) {
 /// 0.00436 ÷ 0.00369 = 1.2×; painted once 3.3× and 2.5× (0.01013 ÷ 0.00409) — the jump is
 /// still there, but no longer 2.5× the steady change. Floor now 2.0× either way: painted
 /// twice at most 2.0× (worst 1.4, margin 0.6), painted once more than 2.0× (least 2.5).
+/// With the rim band aged too (`ParamsBuilder::aging` at every depth, 2026-12-05) the rim
+/// dries on from frame to frame as well, and the steady change grows in both runs: 0.00797 ÷
+/// 0.00662 = 1.2× (ink-rims), 0.00667 ÷ 0.00583 = 1.1× (blue-bloom); painted once 0.01659 ÷
+/// 0.00783 = 2.1× and 0.01054 ÷ 0.00627 = 1.7×. Floor now 1.5× either way: painted twice at
+/// most 1.5× (worst 1.2, margin 0.3), painted once more than 1.5× (least 1.7, margin 0.2).
 #[test]
 fn the_paint_does_not_jump_after_the_first_frame() {
+    // The change from frame 1 to 2 over that from 2 to 3 that separates a jump from none.
+    const FLOOR: f32 = 1.5;
     let mut failures = Vec::new();
     for name in ["ink-rims", "blue-bloom"] {
         let (first, next) = first_changes(name, &Params::builder().seed(1).build().unwrap());
@@ -66,10 +73,10 @@ fn the_paint_does_not_jump_after_the_first_frame() {
             first / next,
             first_once / next_once
         );
-        if first > 2.0 * next {
+        if first > FLOOR * next {
             failures.push(format!("{name}: {first:.5} from frame 1 to 2, {next:.5} from 2 to 3"));
         }
-        if first_once <= 2.0 * next_once {
+        if first_once <= FLOOR * next_once {
             failures.push(format!("{name} painted once: no jump ({first_once:.5}, {next_once:.5})"));
         }
     }

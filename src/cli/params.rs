@@ -114,10 +114,12 @@ pub struct SynthFlags {
     /// paint), settle (the shifted field is not
     /// settled onto its pieces: each carried match keeps the position its own warp gave it),
     /// receding-hold (receding paint runs its exemplar time backwards deep inside the shape
-    /// too, as in the paper, instead of only within the border band), aging (paint deeper
-    /// than the border band steps through the exemplar's frames only as far as the target's
-    /// extents ask, as in the paper: where the shape does not spread, young paint stays young,
-    /// and over a long animation the interior drifts back to the bloom's pale early frames),
+    /// too, as in the paper, instead of only within the border band), aging (paint steps
+    /// through the exemplar's frames only as far as the target's extents ask, as in the paper:
+    /// where the shape does not spread, young paint stays young — a still shape's rim keeps
+    /// the frame it was first painted with, a receding one runs back to the bloom's wet first
+    /// frames — and over a long animation the interior drifts back to the bloom's pale early
+    /// frames),
     /// pace (a moving shape's
     /// paint runs through as many exemplar frames per frame as its motion asks, as in the
     /// paper: a fast limb ages its paint several frames at a time and boils), contrast-balance (the

@@ -563,7 +563,7 @@ impl ParamsBuilder {
         self
     }
 
-    /// Hold the time of receding paint inside the border band (SHIFTNNF, module `shift`,
+    /// Hold the time of receding paint deeper than the border band (SHIFTNNF, module `shift`,
     /// `hold_receding`): where the target moves against the exemplar's flow (a match with the
     /// flipped rotation: the shape recedes there), the paper runs the exemplar's time
     /// backwards, so that the edge retreats the way the bloom spread. That is right at the
@@ -576,28 +576,31 @@ impl ParamsBuilder {
     /// moving run (mean 0.90 → 0.82; the thin limbs 1.68 → 1.56, 1.04 → 0.88), edge darkening
     /// ≥ 0.8 of the exemplar's on 21 of 25 runs instead of 18, palette ≤ 0.03 on 23 of 30
     /// instead of 22, contrast unchanged on average. With [`ParamsBuilder::aging`] on (the
-    /// default) a receding match deeper than b steps forward instead, and this changes
-    /// nothing; it acts with the aging off. Off = the paper's rule everywhere. Default: on.
+    /// default) a receding match steps forward instead, and this changes nothing; it acts
+    /// with the aging off. Off = the paper's rule everywhere. Default: on.
     pub fn receding_hold(mut self, on: bool) -> Self {
         self.p.parts.receding_hold = on;
         self
     }
 
-    /// Paint deeper inside than the border band ages (SHIFTNNF, module `shift`, `aged`): every
-    /// carried match there steps at least one exemplar frame forward per target frame, until
-    /// the exemplar's last frame, whatever the target's extents ask. The paper's Δi follows the
-    /// extents alone, and the engine's nominal step wins only near-ties, so where the target's
-    /// extent does not change (a still interior, the middle of a shape that only moves) paint
-    /// whose exemplar extent changes fast — young paint near the bloom's spreading front —
-    /// stayed young; the search put young paint there (without Ω, λ = 0, even more of it),
-    /// and nothing aged it again. Real paint dries on whether or not its shape moves: it does
-    /// not stay wet, nor un-spread. Within b of the edge the paper's rule is kept (the rim's
-    /// look follows the motion there). Measured on the 300-frame target (yellow-granules,
-    /// 512², seed 1): the interior's mean exemplar frame fell from 21.5 (of 29) at frame 1 to
-    /// 15.3 at frame 150 without it; with it, 28.4–28.8 from frame 30 on, and the lowest
-    /// 50-frame window keeps 0.94 of the first window's contrast instead of 0.87 (README,
-    /// quality section). Not in the paper. Off = Δi as the extents and the nominal step
-    /// choose it everywhere. Default: on.
+    /// Paint ages (SHIFTNNF, module `shift`, `aged`): every carried match steps at least one
+    /// exemplar frame forward per target frame, until the exemplar's last frame, whatever the
+    /// target's extents ask. The paper's Δi follows the extents alone, and the engine's
+    /// nominal step wins only near-ties, so where the target's extent does not change (a still
+    /// interior, the middle of a shape that only moves) paint whose exemplar extent changes
+    /// fast — young paint near the bloom's spreading front — stayed young; the search put
+    /// young paint there (without Ω, λ = 0, even more of it), and nothing aged it again. The
+    /// same rule held the rim of a still shape in the frame it was first painted with, and ran
+    /// a receding rim back towards the bloom's first, wet frames. Real paint dries on whether
+    /// or not its shape moves: it does not stay wet, nor un-spread. Measured on the 300-frame
+    /// target (yellow-granules, 512², seed 1): the interior's mean exemplar frame fell from
+    /// 21.5 (of 29) at frame 1 to 15.3 at frame 150 without it; aged, 28.4–28.8 from frame 30
+    /// on, and the lowest 50-frame window keeps 0.94 of the first window's contrast instead of
+    /// 0.87. Aging the rim band too (it was first applied deeper than the border width b
+    /// only) gave rose-burst's feathered late rim to its still and shrinking ellipses (edge
+    /// darkening 0.48–0.61 → 0.75–0.77 of the exemplar's on the 24-frame suite) and lowered the
+    /// incoherent change of green-wash's moving runs (README, quality section). Not in the
+    /// paper. Off = Δi as the extents and the nominal step choose it everywhere. Default: on.
     pub fn aging(mut self, on: bool) -> Self {
         self.p.parts.aging = on;
         self

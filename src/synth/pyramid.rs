@@ -441,7 +441,7 @@ fn repair(ctx: &Ctx, nnf: &mut Nnf) {
 /// which near the edge is often the paler paint behind the exemplar's rim.
 ///
 /// The finest level merges with the coherence factor κ of the random search
-/// ([`ParamsBuilder::coherence`]): it is only voted, so the merge is the one choice made
+/// ([`super::ParamsBuilder::coherence`]): it is only voted, so the merge is the one choice made
 /// there, and the up-scaled challenger gets the same handicap as a random candidate. Its
 /// errors include Ω and the contrast balance in `ctx`, as every level's do
 /// ([`ParamsBuilder::finest_uniformity`](super::ParamsBuilder::finest_uniformity)). The

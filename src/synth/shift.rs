@@ -41,8 +41,8 @@ pub(crate) struct ShiftInputs<'a> {
     /// Hold receding paint deeper than the border band ([`super::ParamsBuilder::receding_hold`],
     /// [`hold_receding`]).
     pub receding_hold: bool,
-    /// Paint deeper than the border band ages: every carried match there steps at least one
-    /// exemplar frame forward ([`super::ParamsBuilder::aging`], [`aged`]).
+    /// Paint ages: every carried match steps at least one exemplar frame forward
+    /// ([`super::ParamsBuilder::aging`], [`aged`]).
     pub age: bool,
     /// Every match keeps its exemplar frame (Δi = 0): the first frame carried onto itself
     /// ([`super::ParamsBuilder::repaint_first`]).
@@ -134,29 +134,30 @@ fn hold_receding(inp: &ShiftInputs, m: &Match, q: usize) -> bool {
 /// [`hold_receding`]), its own frame, supplying no motion — like a time step, it needs its
 /// center inside the exemplar. (The match the advection takes from the pixel behind q,
 /// [`warped_from`], takes its plain time step: the hold is judged at the match's own pixel.)
-/// Then aged ([`aged`], which leaves [`ShiftInputs::hold_time`]'s matches alone): deeper than
-/// b a held receding match steps one frame forward too.
+/// Then aged ([`aged`], which leaves [`ShiftInputs::hold_time`]'s matches alone): a held
+/// receding match steps one frame forward too.
 fn step_of(inp: &ShiftInputs, m: &Match, q: usize, dt: f32, c: f32) -> Option<(usize, f32)> {
     let step = if inp.hold_time || hold_receding(inp, m, q) {
         inp.src.info_at(m.i as usize, m.x, m.y).map(|_| (m.i as usize, 0.0))
     } else {
         time_step(inp.src, m, dt, c, inp.max_step)
     }?;
-    Some(aged(inp, m, q, step))
+    Some(aged(inp, m, step))
 }
 
-/// The time step `(i + Δi, supplied motion)` of the carried match `m` at target pixel `q`,
-/// with the paint deeper than the border band aged ([`super::ParamsBuilder::aging`]): there
-/// Δi is at least +1 until the exemplar's last frame. A step the rule chose is kept where it
-/// is already forward; otherwise the match steps to the next frame and supplies no motion —
-/// the paint dries where it lies (the exemplar's interior hardly moves), and the advection
-/// carries all of the target's motion, as for a held match. (Counting the path its paint
-/// travels in that frame instead, as a chosen step does, measured worse: the swinging limb's
-/// incoherent change 0.12–0.18 higher with three of four exemplars, 0.05 lower with ink-rims;
-/// 24 frames, seed 1.)
-fn aged(inp: &ShiftInputs, m: &Match, q: usize, (best_i, supplied): (usize, f32)) -> (usize, f32) {
+/// The time step `(i + Δi, supplied motion)` of the carried match `m`, aged
+/// ([`super::ParamsBuilder::aging`]): Δi is at least +1 until the exemplar's last frame, at
+/// the rim as deep inside. A step the rule chose is kept where it is already forward;
+/// otherwise the match steps to the next frame and supplies no motion — the paint dries where
+/// it lies, and the advection carries all of the target's motion, as for a held match. At a
+/// still or receding edge the paper's rule holds the rim in its frame or runs it back towards
+/// the bloom's wet first frames; aged, it settles as the exemplar's own rim does. (Counting
+/// the path its paint travels in that frame instead, as a chosen step does, measured worse:
+/// the swinging limb's incoherent change 0.12–0.18 higher with three of four exemplars, 0.05
+/// lower with ink-rims; 24 frames, seed 1, aging deeper than b only.)
+fn aged(inp: &ShiftInputs, m: &Match, (best_i, supplied): (usize, f32)) -> (usize, f32) {
     let next = (m.i as usize + 1).min(inp.src.frames - 1);
-    if !inp.age || inp.hold_time || inp.dist_cur[q] <= inp.band || best_i >= next {
+    if !inp.age || inp.hold_time || best_i >= next {
         return (best_i, supplied);
     }
     (next, 0.0)
@@ -206,21 +207,20 @@ fn carried_in(inp: &ShiftInputs, prev: &Nnf, q: usize, c: f32) -> Option<Match> 
         }
     }
     let dt = inp.ext_cur[q] - inp.ext_prev[q];
-    let (m, i, x, y) = warped_from(inp, prev, p, q, dt, c)?;
+    let (m, i, x, y) = warped_from(inp, prev, p, dt, c)?;
     Some(placed(inp, q, m, i, x, y))
 }
 
 /// The previous frame's match nearest to `p` (at `⌊p⌉`), time-shifted under the extent change
-/// `dt` ([`time_step`], at most [`ShiftInputs::max_step`] frames; aged as at the target pixel
-/// `q` it is carried to, [`aged`]), and the point it stands for
-/// at `p`: its position offset by `M·(p − ⌊p⌉)`. `None` where `⌊p⌉` is off the field or had no
-/// match.
-fn warped_from(inp: &ShiftInputs, prev: &Nnf, p: Vec2, q: usize, dt: f32, c: f32) -> Option<(Match, usize, f32, f32)> {
+/// `dt` ([`time_step`], at most [`ShiftInputs::max_step`] frames; [`aged`]), and the point it
+/// stands for at `p`: its position offset by `M·(p − ⌊p⌉)`. `None` where `⌊p⌉` is off the
+/// field or had no match.
+fn warped_from(inp: &ShiftInputs, prev: &Nnf, p: Vec2, dt: f32, c: f32) -> Option<(Match, usize, f32, f32)> {
     let m = prev.data[prev.index_near(p)?];
     if !m.ok {
         return None;
     }
-    let (i, _) = aged(inp, &m, q, time_step(inp.src, &m, dt, c, inp.max_step)?);
+    let (i, _) = aged(inp, &m, time_step(inp.src, &m, dt, c, inp.max_step)?);
     let r = p.round();
     let (dx, dy) = m.rotate(p.x - r.x, p.y - r.y);
     Some((m, i, m.x + dx, m.y + dy))
@@ -274,9 +274,9 @@ fn moved(src: &SourceLevel, m: &Match, x: f32, y: f32) -> Option<Match> {
 /// none for opposite flows (time runs backwards only as far as the motion asks). The paper's
 /// rule is `c → 0`; with advection `c` = [`step_cost`]. |Δi| is at most
 /// [`ShiftInputs::max_step`]: one frame where the shape moves rather than grows (see
-/// [`super::ParamsBuilder::pace`]). A held match keeps its frame ([`step_of`]); deeper than
-/// the border band every match steps at least one frame forward ([`aged`]: paint dries on,
-/// whether or not its shape moves).
+/// [`super::ParamsBuilder::pace`]). A held match keeps its frame ([`step_of`]); with
+/// [`ShiftInputs::age`] every match steps at least one frame forward ([`aged`]: paint dries
+/// on, whether or not its shape moves).
 ///
 /// Then, with [`ShiftInputs::advect`]: the motion the time shift did not supply is carried by
 /// warping the field — the target pixel q takes the shifted match of the previous frame's
@@ -328,7 +328,7 @@ pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
             let rest = (speed - supplied).clamp(-speed, speed);
             let back = f / speed * rest;
             let p = Vec2::new((q % prev.w) as f32, (q / prev.w) as f32) - back;
-            if let Some(from) = warped_from(inp, prev, p, q, dt, c) {
+            if let Some(from) = warped_from(inp, prev, p, dt, c) {
                 (m, best_i, x, y) = from;
             } else {
                 let (dx, dy) = m.rotate(back.x, back.y);

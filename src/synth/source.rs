@@ -263,7 +263,7 @@ pub(crate) struct SourceLevel {
     pub seg_count: Vec<[usize; 2]>,
     /// Lane weights in quantization units ([`Quant::weights`]).
     pub lane_w: [f32; LANES],
-    /// Grain map (finest level only, and only with [`Params::keep_grain`]; else empty), same
+    /// Grain map (finest level only, and only with [`super::ParamsBuilder::keep_grain`]; else empty), same
     /// padded layout: the low-pass of the
     /// colors within their own segment (paint or paper), 0..=255, and in lane 3 the local
     /// standard deviation of the grain (color − low-pass), in units of 1/1020.

@@ -334,12 +334,12 @@ fn paint_inside_the_shape_comes_from_inside_the_exemplars_paint() {
 /// at (44, 32) of the 8-frame [`disc_exemplar`], receding (`flip`) or not — deep inside the
 /// target (20 px from its edge, b = 6), moving `speed` px a frame along x, with the target's
 /// extent growing by `dt`: the exemplar frame of every shifted match (the paper's time step:
-/// the interior's aging off).
+/// the aging off).
 fn shifted_frames(flip: bool, speed: f32, dt: f32, receding_hold: bool, max_step: usize) -> Vec<u16> {
     shifted_frames_at(flip, speed, dt, receding_hold, max_step, false, 20.0)
 }
 
-/// [`shifted_frames`] with the interior's aging on or off (`ParamsBuilder::aging`) and the
+/// [`shifted_frames`] with the aging on or off (`ParamsBuilder::aging`) and the
 /// target `depth` pixels from its edge.
 fn shifted_frames_at(
     flip: bool,
@@ -406,12 +406,12 @@ fn a_moving_shape_steps_one_exemplar_frame_at_a_time() {
     assert!(shifted_frames(true, 0.0, 6.0, true, usize::MAX).iter().all(|&i| i == 5));
 }
 
-/// Paint deeper than the border band ages (`ParamsBuilder::aging`): where the target's extent
-/// does not change, or the shape recedes, a carried match there still steps one exemplar frame
-/// forward a frame — the rule without it holds or runs back — and one that the extents send
-/// further forward keeps its step; within the band the rule is the paper's.
+/// Paint ages (`ParamsBuilder::aging`): where the target's extent does not change, or the
+/// shape recedes, a carried match still steps one exemplar frame forward a frame — the rule
+/// without it holds or runs back — deep inside and in the rim band alike, and one that the
+/// extents send further forward keeps its step.
 #[test]
-fn interior_paint_ages_one_frame_at_least() {
+fn paint_ages_one_frame_at_least() {
     for speed in [0.0, 1.0] {
         // Receding deep inside: held without aging (where the pixel keeps its own match; the
         // match the advection takes from behind runs back), one frame forward with it.
@@ -422,9 +422,17 @@ fn interior_paint_ages_one_frame_at_least() {
         // The paper's rule runs receding paint back; aged, it still steps forward.
         let aged = shifted_frames_at(true, speed, 6.0, false, usize::MAX, true, 20.0);
         assert!(aged.iter().all(|&i| i == 6), "aged instead of running back, speed {speed}: {aged:?}");
-        // Within the band (2 px from the edge, b = 6) the paper's rule: back.
-        let band = shifted_frames_at(true, speed, 6.0, false, usize::MAX, true, 2.0);
+        // Within the band (2 px from the edge, b = 6) a receding rim runs back by the
+        // paper's rule, and steps forward aged.
+        let band = shifted_frames_at(true, speed, 6.0, false, usize::MAX, false, 2.0);
         assert!(!band.is_empty() && band.iter().all(|&i| i < 5), "band runs back, speed {speed}: {band:?}");
+        let band = shifted_frames_at(true, speed, 6.0, false, usize::MAX, true, 2.0);
+        assert!(!band.is_empty() && band.iter().all(|&i| i == 6), "aged band, speed {speed}: {band:?}");
+        // A still rim (the extent unchanged): held by the rule, one frame forward aged.
+        let still = shifted_frames_at(false, speed, 0.0, true, usize::MAX, false, 2.0);
+        assert!(!still.is_empty() && still.iter().all(|&i| i == 5), "still rim held, speed {speed}: {still:?}");
+        let still = shifted_frames_at(false, speed, 0.0, true, usize::MAX, true, 2.0);
+        assert!(!still.is_empty() && still.iter().all(|&i| i == 6), "still rim aged, speed {speed}: {still:?}");
         // Aligned with a large extent change: the extents' jump is kept.
         let jump = shifted_frames_at(false, speed, 12.0, true, usize::MAX, true, 20.0);
         assert!(jump.iter().all(|&i| i > 6), "aged keeps the jump, speed {speed}: {jump:?}");

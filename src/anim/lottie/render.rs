@@ -156,7 +156,7 @@ pub fn render(model: &Model, target: Target, time: f32, width: u32, height: u32,
 /// keyframes, which interpolate vertex by vertex; an ellipse's or a rectangle's keyed size)
 /// moves its outline point by point: sampled along each segment at the same curve parameters
 /// at both times, the best affine map of the samples (least squares) plus each sample's
-/// remaining motion, spread inside by inverse squared distance ([`PointMap`]) — exact for an
+/// remaining motion, spread inside by inverse squared distance (`anim::motion`'s `PointMap`) — exact for an
 /// outline that only scales or shears, an estimate inside one that bends. `None` when a
 /// fill's outline changes its structure (a trim, a path of another vertex count), when the
 /// two times do not draw the same number of fills (one appears, disappears or fades out
