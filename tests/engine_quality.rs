@@ -228,10 +228,10 @@ fn still_target_is_temporally_coherent() {
     // Two parts hold a still target's paint from frame to frame: the temporal term, and
     // MERGENNF judging the carried field against its own picture (the carried estimate), which
     // keeps carried matches unless a new one really fits better. Either alone is enough here;
-    // without both the paint boils. Measured with the interior's aging off
-    // (`ParamsBuilder::aging`): it changes the paint on purpose, as the exemplar's own paint
-    // dries on, by the same amount in every configuration, and hides the hold (with it, measured
-    // 2026-12-05 before the rim aged too: full 0.559, without the temporal term 0.524, without the carried estimate
+    // without both the paint boils. Measured with the aging off (`ParamsBuilder::aging`): it
+    // changes the paint on purpose, as the exemplar's own paint dries on, by the same amount in
+    // every configuration, and hides the hold (with it, measured 2026-12-05 before the rim aged
+    // too: full 0.559, without the temporal term 0.524, without the carried estimate
     // 0.589, without both 1.474 — the exemplar's own change is 1; the floor of the full
     // method's ratio is 1.0 for that). Measured without aging (temporal change ratio): full
     // 0.102, without the temporal term 0.082, without the carried estimate 0.146, without both
