@@ -439,8 +439,10 @@ fn flow_residual_is_zero_for_moving_paint_and_large_for_new_paint() {
         inside.map(|(_, (a, b))| (a - b).abs()).sum::<f32>() / region.count() as f32
     };
     // Whole pixels: the flow carries the texture exactly. Sub-pixel: bilinear resampling of this
-    // fine texture (cells of 2.5 px) leaves a little.
-    for (shift, most) in [(Vec2::new(2.0, -1.0), 0.01), (Vec2::new(1.7, -1.2), 0.1)] {
+    // fine texture (cells of 2.5 px) leaves a little — read half-way between the frames, both
+    // blurred alike: 0.027 of the plain difference (0.078 when only the first frame was carried
+    // onto the second and blurred).
+    for (shift, most) in [(Vec2::new(2.0, -1.0), 0.01), (Vec2::new(1.7, -1.2), 0.04)] {
         let moved = moved_texture(shift, 0.0);
         let plain = mean_diff(&still, &moved);
         let residual = eval::flow_residual(&still, &moved, &region, &p).unwrap();

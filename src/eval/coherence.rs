@@ -31,11 +31,21 @@ pub fn coherence_region(prev: &Shape, next: &Shape, margin: f32) -> Mask {
     Plane::from_fn(w, h, |x, y| prev.sdf.get(x, y).min(next.sdf.get(x, y)) + 0.5 >= margin)
 }
 
-/// The change from `prev` to `next` (luma planes) that motion does not explain: the dense
-/// flow from `next` to `prev` ([`farneback_flow`]) carries `prev` onto `next`
-/// ([`warp_bilinear`]), and the result is the mean absolute luma difference
-/// `|next − warped prev|` over `region`; `None` for an empty region. 0 for paint that only
-/// moves (a translated texture); large when each frame shows unrelated paint.
+/// The change from `prev` to `next` (luma planes) that motion does not explain: with the
+/// dense flow `f` from `next` to `prev` ([`farneback_flow`]), both frames are carried to the
+/// time half-way between them — `prev` read at `x + f/2`, `next` at `x − f/2`
+/// ([`warp_bilinear`]) — and the result is the mean absolute luma difference of the two over
+/// `region`; `None` for an empty region. 0 for paint that only moves (a translated texture);
+/// large when each frame shows unrelated paint.
+///
+/// Half-way rather than `prev` carried the whole way onto `next`: bilinear reading between
+/// pixels blurs, and blurring only one of the two frames counted the blur as change. For a
+/// translation by `f` the two readings fall at mirrored fractions of a pixel and blur alike.
+/// Measured on a still paint moved rigidly (nothing in it changes; the bundled exemplars'
+/// last frames, 24 frames, 0.5 and 1.3 px a frame): yellow-granules' fine grain read 0.0041
+/// and 0.0049 luma carried the whole way — three quarters of the exemplar's own change, 0.0054
+/// — and 0.0026 and 0.0022 half-way; ink-rims 0.0056 and 0.0067 against 0.0035 and 0.0031.
+/// Whole-pixel moves read 0.0002–0.0003 either way.
 pub fn flow_residual(prev: &Plane<f32>, next: &Plane<f32>, region: &Mask, params: &FarnebackParams) -> Option<f32> {
     let (sum, n) = residual_sum(prev, next, region, params);
     (n > 0).then(|| (sum / n as f64) as f32)
@@ -61,9 +71,11 @@ fn residual_bins(
         return bins;
     }
     let flow = farneback_flow(next, prev, params);
-    let warped = warp_bilinear(prev, &flow);
+    let (ahead, behind) = (flow.map(|f| f * 0.5), flow.map(|f| f * -0.5));
+    let warped = warp_bilinear(prev, &ahead);
+    let met = warp_bilinear(next, &behind);
     let last = bins.len() - 1;
-    for (k, ((&a, &b), &inside)) in next.data().iter().zip(warped.data()).zip(region.data()).enumerate() {
+    for (k, ((&a, &b), &inside)) in met.data().iter().zip(warped.data()).zip(region.data()).enumerate() {
         if inside {
             bins[bin(k).min(last)].add((a - b).abs() as f64);
         }
