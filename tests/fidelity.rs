@@ -529,14 +529,14 @@ fn thin_parts_take_the_exemplar_colors_at_their_depths() {
 }
 
 /// Paint ages (`ParamsBuilder::aging`, at every depth; this test reads the interior): over a
-/// target longer than the exemplar the interior's paint stays on the exemplar's settled, last frames instead of
-/// drifting back to the bloom's young, flat ones. Yellow-granules (30 frames) on the first 150
-/// frames of the long target (a blob that drifts, swells and turns), 512², seed 1: the mean
-/// exemplar frame of the matches deeper than 12 px inside, over frames 101–150.
+/// target longer than the exemplar the interior's paint stays on the exemplar's settled, last
+/// frames instead of drifting back to the bloom's young, flat ones. Yellow-granules (30 frames)
+/// on the first 150 frames of the long target (a blob that drifts, swells and turns), 512²,
+/// seed 1: the mean exemplar frame of the matches deeper than 12 px inside, over frames 101–150.
 ///
 /// Measured (2026-12-05, printed): 28.7 of 29 with the aging, 13.8 without (at frame 1 both
-/// 21.5, `synth --debug`); with the rim band aged too, 28.8 and 13.8. Floors: with it at least 26 (0.9 of the last frame index), and at
-/// least 8 frames later than without (measured 14.9).
+/// 21.5, `synth --debug`); with the rim band aged too, 28.8 and 13.8. Floors: with it at least
+/// 26 (0.9 of the last frame index), and at least 8 frames later than without (measured 14.9).
 #[test]
 fn interior_paint_stays_settled_over_a_long_target() {
     use fluidymation::exemplar::{self, SearchPath};
