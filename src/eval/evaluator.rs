@@ -5,7 +5,7 @@ use super::coherence::{incoherent_change_binned, pair_residual};
 use super::contrast::local_contrast_binned;
 use super::coverage::coverage_from_counts;
 use super::depth::{DEPTH_BINS, DepthProfile, depth_bin, region_bins};
-use super::flow::motion_pair_mean;
+use super::flow::{motion_pair_mean, motion_pair_mean_with};
 use super::patches::frame_patch_mean;
 use super::temporal::frame_change_mean;
 use super::{
@@ -187,7 +187,12 @@ pub struct Evaluator<'a> {
     size: Option<(usize, usize)>,
     frames: Vec<FrameTotals>,
     prev: Option<Previous>,
+    /// The target's known motion, when it has one ([`Evaluator::with_motion`]).
+    motion: Option<KnownMotion<'a>>,
 }
+
+/// The motion at pixel `(x, y)` from frame `k − 1` to frame `k`, called as `(k, x, y)`.
+pub type KnownMotion<'a> = Box<dyn Fn(usize, usize, usize) -> Option<glam::Vec2> + Sync + 'a>;
 
 impl<'a> Evaluator<'a> {
     /// An evaluator of a sequence of `frames` frames (the number over which
@@ -206,7 +211,18 @@ impl<'a> Evaluator<'a> {
             size: None,
             frames: Vec::new(),
             prev: None,
+            motion: None,
         })
+    }
+
+    /// Measures the motion agreement against the target's known motion `motion(k, x, y)` (a
+    /// generated target's whole motion) instead of the normal motion its masks reveal
+    /// ([`super::motion_agreement_with`]): masks show only the normal part, which rewards paint
+    /// that lags a turning shape (the quality suite's turning ellipse: 0.84–0.86 against the
+    /// normal part, 0.56–0.59 against the whole motion; `crate::quality`).
+    pub fn with_motion(mut self, motion: KnownMotion<'a>) -> Self {
+        self.motion = Some(motion);
+        self
     }
 
     /// Frames pushed so far.
@@ -250,7 +266,14 @@ impl<'a> Evaluator<'a> {
                         let still = stationary_interior(pshape, shape, &o.temporal);
                         (
                             frame_change_mean(prgb, &rgb[i], &still),
-                            motion_pair_mean((pluma, pshape), (&lumas[i], shape), &o.motion),
+                            match &self.motion {
+                                Some(m) => {
+                                    motion_pair_mean_with((pluma, pshape), (&lumas[i], shape), &o.motion, &|x, y| {
+                                        m(offset + i, x, y)
+                                    })
+                                }
+                                None => motion_pair_mean((pluma, pshape), (&lumas[i], shape), &o.motion),
+                            },
                             Some(pair_residual((pluma, pshape), (&lumas[i], shape), &o.coherence)),
                         )
                     }

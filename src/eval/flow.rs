@@ -312,7 +312,7 @@ pub(crate) fn motion_pair_mean(
 }
 
 /// [`motion_pair_mean`] against the target motion `motion(x, y)`.
-fn motion_pair_mean_with(
+pub(crate) fn motion_pair_mean_with(
     prev: (&Plane<f32>, &Shape),
     next: (&Plane<f32>, &Shape),
     params: &MotionParams,

@@ -74,7 +74,7 @@ pub use coverage::{
     OPAQUE_ALPHA, Painted, coverage_iou, detect_painted, estimate_background, has_alpha, intersection_union, iou,
     painted_mask,
 };
-pub use evaluator::{Evaluator, Reference, evaluate};
+pub use evaluator::{Evaluator, KnownMotion, Reference, evaluate};
 pub use farneback::{FarnebackParams, MIN_LEVEL_SIDE, REGULARIZATION, farneback_flow, warp_bilinear};
 pub use flow::{
     BlockMatchParams, MotionParams, block_matching_flow, match_block, motion_agreement, motion_agreement_with,

@@ -7,7 +7,7 @@
 //! the shape stays in the frame.
 
 use crate::img::Plane;
-use glam::Vec2;
+use glam::{Mat2, Vec2};
 use serde::{Deserialize, Serialize};
 use std::f32::consts::TAU;
 
@@ -124,17 +124,49 @@ impl Target {
             }
             TargetKind::Translating => ellipse(Vec2::new(185.0 + 3.0 * t, 236.0 + 0.8 * t), 110.0, 85.0, 0.0),
             TargetKind::Rotating => ellipse(Vec2::new(256.0, 256.0), 190.0, 70.0, 2.5f32.to_radians() * t),
-            TargetKind::Limb => {
-                let angle = 25f32.to_radians() * (TAU * t / 48.0).sin();
-                let shoulder = Vec2::new(150.0, 256.0);
-                capsule(shoulder, shoulder + 200.0 * Vec2::from_angle(angle), 7.0)
-            }
+            TargetKind::Limb => capsule(LIMB_SHOULDER, LIMB_SHOULDER + 200.0 * Vec2::from_angle(limb_angle(t)), 7.0),
             TargetKind::Long => {
-                let center = Vec2::new(256.0 + 55.0 * (TAU * t / 300.0).sin(), 256.0 + 40.0 * (TAU * t / 170.0).sin());
-                let radius = 105.0 + 25.0 * (TAU * t / 120.0).sin();
-                blob(center, radius, 0.9f32.to_radians() * t)
+                let (center, radius, angle) = long_pose(t);
+                blob(center, radius, angle)
             }
         }
+    }
+
+    /// Where frame `k`'s shape is: the affine map `p = A·u + c` from the shape's own
+    /// coordinates `u` to the 512 canvas (the ellipse's unit circle, the limb's shoulder frame,
+    /// the blob's unit outline).
+    fn pose(&self, k: usize) -> (Mat2, Vec2) {
+        let t = self.time(k);
+        let turned = |angle: f32, sx: f32, sy: f32| Mat2::from_angle(angle) * Mat2::from_diagonal(Vec2::new(sx, sy));
+        match self.kind {
+            TargetKind::Still => (turned(0.0, 150.0, 115.0), Vec2::new(256.0, 256.0)),
+            TargetKind::Growing => (turned(0.0, 70.0 + 2.2 * t, 55.0 + 1.8 * t), Vec2::new(200.0 + 2.0 * t, 230.0 + t)),
+            TargetKind::Shrinking => {
+                (turned(0.0, 180.0 - 2.2 * t, 150.0 - 1.8 * t), Vec2::new(300.0 - 1.5 * t, 280.0 - t))
+            }
+            TargetKind::Translating => (turned(0.0, 110.0, 85.0), Vec2::new(185.0 + 3.0 * t, 236.0 + 0.8 * t)),
+            TargetKind::Rotating => (turned(2.5f32.to_radians() * t, 190.0, 70.0), Vec2::new(256.0, 256.0)),
+            TargetKind::Limb => (turned(limb_angle(t), 1.0, 1.0), LIMB_SHOULDER),
+            TargetKind::Long => {
+                let (center, radius, angle) = long_pose(t);
+                (turned(angle, radius, radius), center)
+            }
+        }
+    }
+
+    /// The target's own motion at pixel `(x, y)` from frame `k − 1` to frame `k` (pixels of the
+    /// target's size per frame): where the material at `(x, y)` in frame `k − 1` is carried by
+    /// the shape's motion — the whole of it, not only the normal part its masks show. `None` at
+    /// the first frame.
+    pub fn motion(&self, k: usize, x: usize, y: usize) -> Option<Vec2> {
+        if k == 0 || k >= self.frames {
+            return None;
+        }
+        let s = self.side as f32 / CANVAS;
+        let ((a0, c0), (a1, c1)) = (self.pose(k - 1), self.pose(k));
+        let p = Vec2::new(x as f32, y as f32) / s;
+        let u = a0.inverse() * (p - c0);
+        Some((a1 * u + c1 - p) * s)
     }
 
     /// Frame `k`'s coverage (`0..=1`, anti-aliased).
@@ -143,6 +175,20 @@ impl Target {
         let points: Vec<Vec2> = self.outline(k).into_iter().map(|p| p * s).collect();
         fill(&points, self.side)
     }
+}
+
+/// The limb's shoulder end, on the 512 canvas.
+const LIMB_SHOULDER: Vec2 = Vec2::new(150.0, 256.0);
+
+/// The limb's angle at time `t`: ±25°, one swing forth and back in 48 frames.
+fn limb_angle(t: f32) -> f32 {
+    25f32.to_radians() * (TAU * t / 48.0).sin()
+}
+
+/// The long target's blob at time `t`: centre, radius, angle.
+fn long_pose(t: f32) -> (Vec2, f32, f32) {
+    let center = Vec2::new(256.0 + 55.0 * (TAU * t / 300.0).sin(), 256.0 + 40.0 * (TAU * t / 170.0).sin());
+    (center, 105.0 + 25.0 * (TAU * t / 120.0).sin(), 0.9f32.to_radians() * t)
 }
 
 /// Vertices per full turn of a curved outline.
@@ -238,6 +284,37 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn motion_carries_the_outline_onto_the_next_frame() {
+        // The motion of a point on frame k−1's outline lands on frame k's outline, for every
+        // kind (the pose and the outline describe the same shape).
+        for kind in TargetKind::ALL {
+            let t = Target::new(kind, 256, 48);
+            for k in [1, 7, 30] {
+                let (a0, c0) = t.pose(k - 1);
+                let (a1, c1) = t.pose(k);
+                let s = 256.0 / CANVAS;
+                for u in [Vec2::new(1.0, 0.0), Vec2::new(0.0, 1.0)] {
+                    let p = (a0 * u + c0) * s;
+                    // Sample at the nearest pixel and compare where it goes with the pose map.
+                    let (x, y) = (p.x.round(), p.y.round());
+                    let m = t.motion(k, x as usize, y as usize).unwrap();
+                    let want = ((a1 * (a0.inverse() * (Vec2::new(x, y) / s - c0)) + c1) * s) - Vec2::new(x, y);
+                    assert!((m - want).length() < 1e-3, "{kind:?} frame {k}");
+                }
+            }
+            assert!(t.motion(0, 10, 10).is_none());
+        }
+        // Known speeds: the translating ellipse moves (3, 0.8) px per frame on the canvas; the
+        // still one does not move.
+        let tr = Target::new(TargetKind::Translating, 512, 48).motion(5, 100, 300).unwrap();
+        assert!((tr - Vec2::new(3.0, 0.8)).length() < 1e-3, "{tr:?}");
+        assert!(Target::new(TargetKind::Still, 512, 48).motion(5, 256, 256).unwrap().length() < 1e-6);
+        // The limb turns about its shoulder: a point 200 px out moves ~11 px at the start.
+        let tip = Target::new(TargetKind::Limb, 512, 48).motion(1, 350, 256).unwrap();
+        assert!((tip.length() - 200.0 * limb_angle(1.0)).abs() < 0.2, "{tip:?}");
     }
 
     #[test]
