@@ -111,24 +111,34 @@ impl Target {
         }
     }
 
-    /// The outline of frame `k` on the 512 canvas.
-    fn outline(&self, k: usize) -> Vec<Vec2> {
+    /// Frame `k`'s shape on the 512 canvas, the one description its outline and its pose
+    /// are both drawn from.
+    fn shape(&self, k: usize) -> Shape {
         let t = self.time(k);
         match self.kind {
-            TargetKind::Still => ellipse(Vec2::new(256.0, 256.0), 150.0, 115.0, 0.0),
+            TargetKind::Still => Shape::Ellipse(Vec2::new(256.0, 256.0), 150.0, 115.0, 0.0),
             TargetKind::Growing => {
-                ellipse(Vec2::new(200.0 + 2.0 * t, 230.0 + 1.0 * t), 70.0 + 2.2 * t, 55.0 + 1.8 * t, 0.0)
+                Shape::Ellipse(Vec2::new(200.0 + 2.0 * t, 230.0 + 1.0 * t), 70.0 + 2.2 * t, 55.0 + 1.8 * t, 0.0)
             }
             TargetKind::Shrinking => {
-                ellipse(Vec2::new(300.0 - 1.5 * t, 280.0 - 1.0 * t), 180.0 - 2.2 * t, 150.0 - 1.8 * t, 0.0)
+                Shape::Ellipse(Vec2::new(300.0 - 1.5 * t, 280.0 - 1.0 * t), 180.0 - 2.2 * t, 150.0 - 1.8 * t, 0.0)
             }
-            TargetKind::Translating => ellipse(Vec2::new(185.0 + 3.0 * t, 236.0 + 0.8 * t), 110.0, 85.0, 0.0),
-            TargetKind::Rotating => ellipse(Vec2::new(256.0, 256.0), 190.0, 70.0, 2.5f32.to_radians() * t),
-            TargetKind::Limb => capsule(LIMB_SHOULDER, LIMB_SHOULDER + 200.0 * Vec2::from_angle(limb_angle(t)), 7.0),
+            TargetKind::Translating => Shape::Ellipse(Vec2::new(185.0 + 3.0 * t, 236.0 + 0.8 * t), 110.0, 85.0, 0.0),
+            TargetKind::Rotating => Shape::Ellipse(Vec2::new(256.0, 256.0), 190.0, 70.0, 2.5f32.to_radians() * t),
+            TargetKind::Limb => Shape::Limb(limb_angle(t)),
             TargetKind::Long => {
-                let (center, radius, angle) = long_pose(t);
-                blob(center, radius, angle)
+                let center = Vec2::new(256.0 + 55.0 * (TAU * t / 300.0).sin(), 256.0 + 40.0 * (TAU * t / 170.0).sin());
+                Shape::Blob(center, 105.0 + 25.0 * (TAU * t / 120.0).sin(), 0.9f32.to_radians() * t)
             }
+        }
+    }
+
+    /// The outline of frame `k` on the 512 canvas.
+    fn outline(&self, k: usize) -> Vec<Vec2> {
+        match self.shape(k) {
+            Shape::Ellipse(center, rx, ry, angle) => ellipse(center, rx, ry, angle),
+            Shape::Limb(angle) => capsule(LIMB_SHOULDER, LIMB_SHOULDER + 200.0 * Vec2::from_angle(angle), 7.0),
+            Shape::Blob(center, radius, angle) => blob(center, radius, angle),
         }
     }
 
@@ -136,21 +146,11 @@ impl Target {
     /// coordinates `u` to the 512 canvas (the ellipse's unit circle, the limb's shoulder frame,
     /// the blob's unit outline).
     fn pose(&self, k: usize) -> (Mat2, Vec2) {
-        let t = self.time(k);
         let turned = |angle: f32, sx: f32, sy: f32| Mat2::from_angle(angle) * Mat2::from_diagonal(Vec2::new(sx, sy));
-        match self.kind {
-            TargetKind::Still => (turned(0.0, 150.0, 115.0), Vec2::new(256.0, 256.0)),
-            TargetKind::Growing => (turned(0.0, 70.0 + 2.2 * t, 55.0 + 1.8 * t), Vec2::new(200.0 + 2.0 * t, 230.0 + t)),
-            TargetKind::Shrinking => {
-                (turned(0.0, 180.0 - 2.2 * t, 150.0 - 1.8 * t), Vec2::new(300.0 - 1.5 * t, 280.0 - t))
-            }
-            TargetKind::Translating => (turned(0.0, 110.0, 85.0), Vec2::new(185.0 + 3.0 * t, 236.0 + 0.8 * t)),
-            TargetKind::Rotating => (turned(2.5f32.to_radians() * t, 190.0, 70.0), Vec2::new(256.0, 256.0)),
-            TargetKind::Limb => (turned(limb_angle(t), 1.0, 1.0), LIMB_SHOULDER),
-            TargetKind::Long => {
-                let (center, radius, angle) = long_pose(t);
-                (turned(angle, radius, radius), center)
-            }
+        match self.shape(k) {
+            Shape::Ellipse(center, rx, ry, angle) => (turned(angle, rx, ry), center),
+            Shape::Limb(angle) => (turned(angle, 1.0, 1.0), LIMB_SHOULDER),
+            Shape::Blob(center, radius, angle) => (turned(angle, radius, radius), center),
         }
     }
 
@@ -185,10 +185,14 @@ fn limb_angle(t: f32) -> f32 {
     25f32.to_radians() * (TAU * t / 48.0).sin()
 }
 
-/// The long target's blob at time `t`: centre, radius, angle.
-fn long_pose(t: f32) -> (Vec2, f32, f32) {
-    let center = Vec2::new(256.0 + 55.0 * (TAU * t / 300.0).sin(), 256.0 + 40.0 * (TAU * t / 170.0).sin());
-    (center, 105.0 + 25.0 * (TAU * t / 120.0).sin(), 0.9f32.to_radians() * t)
+/// One frame's shape on the 512 canvas.
+enum Shape {
+    /// Centre, radii, angle.
+    Ellipse(Vec2, f32, f32, f32),
+    /// The limb's angle about [`LIMB_SHOULDER`].
+    Limb(f32),
+    /// Centre, radius, angle of [`blob`].
+    Blob(Vec2, f32, f32),
 }
 
 /// Vertices per full turn of a curved outline.
@@ -288,8 +292,8 @@ mod tests {
 
     #[test]
     fn motion_carries_the_outline_onto_the_next_frame() {
-        // The motion of a point on frame k−1's outline lands on frame k's outline, for every
-        // kind (the pose and the outline describe the same shape).
+        // The motion is the map from frame k−1's pose to frame k's, for every kind (the pose and
+        // the outline are drawn from the same `shape`).
         for kind in TargetKind::ALL {
             let t = Target::new(kind, 256, 48);
             for k in [1, 7, 30] {
