@@ -218,8 +218,9 @@ impl<'a> Evaluator<'a> {
     /// Measures the motion agreement against the target's known motion `motion(k, x, y)` (a
     /// generated target's whole motion) instead of the normal motion its masks reveal
     /// ([`super::motion_agreement_with`]): masks show only the normal part, which rewards paint
-    /// that lags a turning shape (the quality suite's turning ellipse: 0.84–0.86 against the
-    /// normal part, 0.56–0.59 against the whole motion; `crate::quality`).
+    /// that lags a turning shape (the quality suite's turning ellipse on the flow guide before
+    /// 2026-12-06: 0.84–0.86 against the normal part, 0.56–0.59 against the whole motion;
+    /// `crate::quality`).
     pub fn with_motion(mut self, motion: KnownMotion<'a>) -> Self {
         self.motion = Some(motion);
         self

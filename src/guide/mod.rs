@@ -158,10 +158,11 @@ impl GuideParams {
     /// the cache key holds no version of the computation otherwise, and an exemplar's guides
     /// cached by an earlier release would be read beside a target's computed by this one
     /// (measured with a changed flow estimate: the identity's worst frame fell from 33.5–100 dB
-    /// to 23–37 dB until the version changed).
+    /// to 23–37 dB until the version changed). v4: the flow's speeds divided by the smoothed
+    /// field's slope, its unobserved modes fitted rigid.
     pub fn fingerprint(&self) -> String {
         format!(
-            "guides-v3 blur={} thr={} tblur={} frad={} tan={} tol={}",
+            "guides-v4 blur={} thr={} tblur={} frad={} tan={} tol={}",
             self.blur_sigma,
             self.mask_threshold,
             self.time_blur_sigma,

@@ -28,9 +28,9 @@
 //! includes a little paper, so its IoU ([`Row::coverage_alpha`]) is reported beside it.
 //! Motion agreement on a generated target is measured against its known motion
 //! ([`Target::motion`], [`Evaluator::with_motion`]): its masks show only the normal part, which
-//! rewarded paint that turned at two thirds of a turning ellipse's speed (0.84–0.86 against the
-//! normal part, 0.56–0.59 against the whole); the identity, whose motion is not known, keeps the
-//! masks' normal motion.
+//! rewarded paint that turned at two thirds of a turning ellipse's speed (the flow guide before
+//! 2026-12-06; 0.84–0.86 against the normal part, 0.56–0.59 against the whole, 0.94–0.97 with
+//! today's flow); the identity, whose motion is not known, keeps the masks' normal motion.
 //!
 //! **Parallelism.** Runs go through [`SuiteOptions::jobs`] lanes at once (each run's frames
 //! in order, its stages parallel inside); every number depends only on the inputs and the
