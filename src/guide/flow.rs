@@ -32,10 +32,10 @@
 //! 2. Boundary pixels `B_i`: mask pixels with a 4-neighbour, inside the image, that is not in the
 //!    mask (the image edge is not a material boundary). At `b ∈ B_i` the outward normal is
 //!    `n = −∇D̃_i / |∇D̃_i|` (central differences, one-sided at the image edge) and the normal speed
-//!    `s = (D̃_{i+1}(b) − D̃_i(b)) / g`, `g` the mean of `|∇D̃_i(b)|` and `|∇D̃_{i+1}(b)|` clamped to
-//!    `[0.9, 1]` (an addition: a field moving at speed v changes by `|∇D̃|·(n·v)`, and an average of
-//!    distance fields whose normals differ a little has a gradient a little shorter than 1; see
-//!    `MIN_SLOPE`). The boundary flow is `s · n`. This is Appendix A's
+//!    `s = (D̃_{i+1}(b) − D̃_i(b)) / g`, `g` the mean of `|∇D̃_i(b)|` and `|∇D̃_{i+1}(b)|`
+//!    clamped to `[0.9, 1]` (an addition: a field moving at speed v changes by `|∇D̃|·(n·v)`,
+//!    and an average of distance fields whose normals differ a little has a gradient a little
+//!    shorter than 1; see `MIN_SLOPE`). The boundary flow is `s · n`. This is Appendix A's
 //!    `(dist_i − dist_{i−1}) ∇dist_i / |∇dist_i|` with one sign flipped: for a distance that is
 //!    *positive inside*, a growing mask has a rising distance and a gradient pointing inwards, so
 //!    the paper's expression as printed points inwards; `−∇` is the outward direction.
@@ -369,7 +369,8 @@ impl Task {
 /// The smallest gradient magnitude of the smoothed distance fields that the change of a
 /// boundary pixel's distance is divided by (step 2). The frames of a front that moves as one
 /// agree to within a few percent (translating, growing and shrinking ellipses: the mean flow
-/// error fell from 0.187, 0.120, 0.088 px to 0.114, 0.081, 0.054 px with the division); where
+/// error fell from 0.187, 0.120, 0.088 px to 0.114, 0.081, 0.054 px with the division, figures
+/// measured while building it with an earlier version of `tests/guide_motion.rs`); where
 /// they disagree more — the tip of a swinging limb, whose neighbouring frames' nearest edge is
 /// its side, not its end — the change is not a front's speed, and dividing by a small slope
 /// only enlarges its error (limb: 0.76 px undivided, 0.91 px divided down to slope 0.5,
@@ -429,8 +430,9 @@ struct Affine {
 impl Affine {
     const ZERO: Affine = Affine { c: DVec2::ZERO, inv_rho: 0.0, theta: [0.0; 6] };
 
-    /// Relative weight of the ridge term: modes whose information is below ~1 % of the average
-    /// are pulled towards zero.
+    /// Relative weight of the ridge term on the observed modes (those at or above
+    /// [`Self::UNOBSERVED`] of the average information): each is shrunk by at most
+    /// `RIDGE / (UNOBSERVED + RIDGE)` ≈ 1/6 of its least-squares value.
     const RIDGE: f64 = 0.01;
 
     /// Modes of the motion whose information (eigenvalue of the normal matrix) is below this
@@ -449,8 +451,8 @@ impl Affine {
     /// (`L·J·L⁻¹` for the ellipse `L`·disc and `J` the turn), and a thin limb shows little of
     /// how it moves along itself. The plain ridge solution takes the smallest motion that fits,
     /// which turns such an ellipse at about two thirds of its speed and makes up the rest with
-    /// a shear (measured on a 190 × 70 ellipse turning 2.5°/frame: mean flow error 1.80 px of
-    /// 3.99). So the normal matrix is diagonalized, and along its eigen-directions whose
+    /// a shear (measured while building it on a 190 × 70 ellipse turning 2.5°/frame, before the
+    /// slope division: mean flow error 1.80 px of 3.99). So the normal matrix is diagonalized, and along its eigen-directions whose
     /// information is below [`Self::UNOBSERVED`] of the average the combination with the least
     /// strain (the symmetric part of `A`: growth, stretch, shear) is taken, held back by
     /// [`Self::STILLNESS`]·`|θ|²` (a part that is nearly a disc does not start turning on a
