@@ -593,10 +593,10 @@ fn least_strain(theta: &[f64; 6], dirs: &[[f64; 6]], stillness: f64) -> Option<V
         if g[col][col].abs() < 1e-12 {
             return None;
         }
+        let (pivot_row, bc) = (g[col].clone(), b[col]);
         for r in 0..n {
             if r != col {
-                let f = g[r][col] / g[col][col];
-                let (pivot_row, bc) = (g[col].clone(), b[col]);
+                let f = g[r][col] / pivot_row[col];
                 g[r].iter_mut().zip(&pivot_row).for_each(|(x, p)| *x -= f * p);
                 b[r] -= f * bc;
             }

@@ -311,6 +311,30 @@ mod tests {
             }
             assert!(t.motion(0, 10, 10).is_none());
         }
+        // Independently of the pose: points of frame k−1's outline (at the nearest pixel of the
+        // full canvas) carried by the motion land on frame k's outline, within the half-pixel
+        // diagonal that rounding moved them off it.
+        let to_outline = |outline: &[Vec2], q: Vec2| {
+            (0..outline.len())
+                .map(|i| {
+                    let (a, b) = (outline[i], outline[(i + 1) % outline.len()]);
+                    let t = ((q - a).dot(b - a) / (b - a).length_squared().max(1e-9)).clamp(0.0, 1.0);
+                    (a + t * (b - a) - q).length()
+                })
+                .fold(f32::INFINITY, f32::min)
+        };
+        for kind in TargetKind::ALL {
+            let t = Target::new(kind, CANVAS as usize, 48);
+            for k in [1, 7, 30] {
+                let (before, after) = (t.outline(k - 1), t.outline(k));
+                for p in before.iter().step_by(before.len() / 16) {
+                    let r = p.round();
+                    let q = r + t.motion(k, r.x as usize, r.y as usize).unwrap();
+                    let d = to_outline(&after, q);
+                    assert!(d < 0.75, "{kind:?} frame {k}: {p:?} carried to {q:?}, {d} px off the outline");
+                }
+            }
+        }
         // Known speeds: the translating ellipse moves (3, 0.8) px per frame on the canvas; the
         // still one does not move.
         let tr = Target::new(TargetKind::Translating, 512, 48).motion(5, 100, 300).unwrap();
