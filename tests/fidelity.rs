@@ -309,6 +309,13 @@ fn long_green_wash(params: Params) -> (f32, f32, f32) {
 /// while the first window's rim is still young: the windows' rim 0.90, 0.93, 0.81, 0.79,
 /// 0.76, 0.78 of the exemplar's mean (before: 0.87, 0.89, 0.85, 0.86, 1.02, 1.02). The rim
 /// floor is now 0.80 of the first window's (measured 0.85); the carried rim's +0.05 stays.
+///
+/// Since a boundary's speed is a central difference and the flows are smoothed along the
+/// motion (`guide::flow`, third session of 2026-12-06; printed): rim 0.79 against 0.54 without
+/// the carried rim (+0.25), lowest window's contrast 0.90 against 0.85 without the carried rim
+/// and 0.88 without settling, whole run 0.77 against 0.74 without settling (+0.03). The windows'
+/// rim falls a little lower against the first window's young one; the rim floor is now 0.75 of
+/// the first window's (measured 0.79), the other floors are unchanged.
 #[test]
 fn carried_rim_and_settled_field_keep_the_paint_of_a_long_target() {
     let run = long_green_wash;
@@ -322,7 +329,7 @@ fn carried_rim_and_settled_field_keep_the_paint_of_a_long_target() {
          settling; whole run's contrast {whole:.2}, {whole_unsettled:.2} without settling"
     );
     println!("{what}");
-    assert!(rim >= 0.80 && rim >= rim_merged + 0.05, "{what}");
+    assert!(rim >= 0.75 && rim >= rim_merged + 0.05, "{what}");
     assert!(contrast >= contrast_merged - 0.02, "{what}");
     assert!(whole >= whole_unsettled + 0.02, "{what}");
 }
@@ -396,7 +403,10 @@ fn finest_merge_uniformity_keeps_the_texture_of_a_long_target() {
 /// falloff (measured +0.08) and at least 0.8; green-wash's at least 0.7 (its flat outcome's
 /// lowest, 0.74, less a margin) — a sanity floor that the run without the falloff meets too
 /// (0.80–0.86): for green-wash the falloff's claim rests on the palette; both palettes at least
-/// 0.003 lower with the falloff (measured 0.0070 and 0.0082 lower).
+/// 0.003 lower with the falloff (measured 0.0070 and 0.0082 lower). With the central difference
+/// and the flows smoothed along the motion (third session of 2026-12-06; printed table, seed 1):
+/// contrast green-wash 0.95 against 0.82, yellow-granules 1.04 against 0.94; palette 0.0155
+/// against 0.0242 and 0.0104 against 0.0192 (0.0087 and 0.0088 lower).
 #[test]
 fn extent_falloff_gives_still_interiors_the_exemplar_texture() {
     let run = |falloff: bool| {
@@ -456,7 +466,9 @@ fn extent_falloff_gives_still_interiors_the_exemplar_texture() {
 /// (0.83×), seed 3 0.0131 against 0.0152 (0.86×). The term's gain is green-wash's and
 /// ink-rims' growing paint (at every seed); green-wash's shrinking paint is closer without it.
 /// Floor: the mean with the term at most 0.92× the one without (0.75× until the seeds were
-/// measured; the worst seed measured 0.89×).
+/// measured; the worst seed measured 0.89×). With the central difference and the flows smoothed
+/// along the motion (third session of 2026-12-06; printed, seed 1): 0.0116, 0.0088, 0.0188,
+/// 0.0146 against 0.0153, 0.0062, 0.0228, 0.0163 — mean 0.0134 against 0.0152 (0.88×).
 #[test]
 fn extent_term_tells_the_paint_s_age() {
     let palette = |w_ext: f32| {

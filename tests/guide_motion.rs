@@ -147,12 +147,15 @@ fn forward_then_backward_motion_returns_ext_pos_to_zero() {
     ends.sort_by(f32::total_cmp);
     let median = ends[ends.len() / 2];
     eprintln!("  median at the end {median:.3} px (accumulating norms instead would give ≥ {:.1} px)", 2.0 * peak);
-    // What is left is the estimator's second-order shortfall at the rim (|u_t|²/2r per frame),
-    // which has the same sign both ways; the 2D accumulation itself cancels.
+    // Measured: at the end 0.290 px at most, median 0.221 px, of a peak of 18.94 px. With the
+    // forward difference they were 1.382 and 0.525 px: its second-order shortfall at the rim
+    // (|u_t|²/2r per frame) has the same sign both ways. What is left is the sequence's ends,
+    // where the speed is a one-sided difference. Bounds 0.03 and 0.02 of the peak (0.57 and
+    // 0.38 px).
     assert!(count > 100);
     assert!(peak > 15.0, "{peak}");
-    assert!(end < 0.1 * peak, "{end} vs {peak}");
-    assert!(median < 0.04 * peak, "{median} vs {peak}");
+    assert!(end < 0.03 * peak, "{end} vs {peak}");
+    assert!(median < 0.02 * peak, "{median} vs {peak}");
 }
 
 #[test]
@@ -209,10 +212,11 @@ fn capsule(w: usize, h: usize, a: Vec2, b: Vec2, r: f32) -> Plane<f32> {
 /// A part thinner than the distance it moves in a few frames — an arm, a leg — is where the
 /// distance fields stop measuring the motion: past the part's middle they count from its other
 /// edge. A 12-px bar moving 8 px a frame across itself must still get its speed: measured 98 %
-/// of it along the motion, mean error 0.86 px (91 % and 1.06 px before the flow's slope division
-/// and rigid fit, 2026-12-06; the error is at the round ends, where the nearest edge of the next
-/// frame is not along the normal); before each boundary pixel's window was cut to the frames
-/// that fit (`flow::Task::window_at`), 28 % and 5.77 px.
+/// of it along the motion, mean error 0.22 px (0.86 px with the forward difference, whose
+/// error was at the round ends, where the nearest edge of the next frame is not along the
+/// normal; 91 % and 1.06 px before the flow's slope division and rigid fit, 2026-12-06); before
+/// each boundary pixel's window was cut to the frames that fit (`flow::Task::estimate_at`),
+/// 28 % and 5.77 px. Bounds 0.9 and 0.4 px.
 #[test]
 fn a_thin_fast_bar_keeps_its_speed() {
     let (w, h, n) = (160, 340, 32);
@@ -237,7 +241,7 @@ fn a_thin_fast_bar_keeps_its_speed() {
     }
     let (along, err) = (along / count, err / count);
     eprintln!("thin bar at 8 px/frame: flow along the motion {:.0} % of it, mean error {err:.2} px", 100.0 * along);
-    assert!(along > 0.85 && err < 1.3, "{along} {err}");
+    assert!(along > 0.9 && err < 0.4, "{along} {err}");
 }
 
 /// Mean flow error (pixels) inside the mask of the quality suite's generated `kind` against its
@@ -266,19 +270,20 @@ fn flow_error(kind: fluidymation::quality::TargetKind, frames: usize) -> (f32, f
 }
 
 /// The flow the masks give against the shapes' whole motion (24 frames, 512²). Measured, mean
-/// error per pixel: translating 0.093 px of 3.10 px/frame (0.167 before the speed was divided by
-/// the smoothed field's slope), growing 0.058 of 2.44 (0.097), turning ellipse 0.459 of 3.99
-/// (1.781 before the unobserved modes were fitted rigid: it turned at two thirds of its speed
-/// and sheared), limb 0.725 of 2.86 (0.758). Bounds: the measured value plus about 25 % (the
-/// limb 3 %, which the old estimate fails).
+/// error per pixel: translating 0.094 px of 3.10 px/frame (0.093 with the forward difference
+/// and the flows smoothed over time at the pixel, 0.167 before the speed was divided by the
+/// smoothed field's slope), growing 0.051 of 2.44 (0.058, 0.097), turning ellipse 0.462 of 3.99
+/// (0.459; 1.781 before the unobserved modes were fitted rigid: it turned at two thirds of its
+/// speed and sheared), limb 0.244 of 2.86 (0.725, 0.758). Bounds: the measured value plus about
+/// 25 %.
 #[test]
 fn flow_follows_the_whole_motion_of_turning_and_moving_shapes() {
     use fluidymation::quality::TargetKind;
     for (kind, bound) in [
         (TargetKind::Translating, 0.12),
-        (TargetKind::Growing, 0.075),
+        (TargetKind::Growing, 0.065),
         (TargetKind::Rotating, 0.6),
-        (TargetKind::Limb, 0.75),
+        (TargetKind::Limb, 0.31),
     ] {
         let (err, speed) = flow_error(kind, 24);
         eprintln!("{kind:?}: mean flow error {err:.3} px of {speed:.2} px/frame");
@@ -315,10 +320,12 @@ fn translating_disc_speed(r: f32, v: Vec2) -> f32 {
 /// Translating discs keep their speed — less a known shortfall of small, fast ones: a
 /// boundary's speed is a distance change over a whole frame, and a curved front that moves far
 /// for its radius changes its distance by less than `n·v` (about `(|v|² − (n·v)²)/2R` short at
-/// its sides; README, *Where the carrying boils*). Measured (mean flow along the motion over
-/// the middle frames, as a fraction of the speed): radius 7 px at (3.3, 1.7) px/frame 0.865, at
-/// (1.1, 0.6) 0.977; radius 60 px at (3.3, 1.7) 0.984. Floors 0.83, 0.93 and 0.95 (0.035–0.047
-/// below); a fix of the bias should raise the first.
+/// its sides; README, *Where the carrying boils*). The central difference cancels that
+/// second-order term; what is left is of third order (a 7-px disc moves half its radius a
+/// frame). Measured (mean flow along the motion over the middle frames, as a fraction of the
+/// speed): radius 7 px at (3.3, 1.7) px/frame 0.908 (0.865 with the forward difference), at
+/// (1.1, 0.6) 0.965 (0.977); radius 60 px at (3.3, 1.7) 0.982 (0.984). Floors 0.87, 0.93 and
+/// 0.95 (0.032–0.038 below).
 #[test]
 fn translating_discs_keep_their_speed() {
     let small_fast = translating_disc_speed(7.0, Vec2::new(3.3, 1.7));
@@ -327,5 +334,5 @@ fn translating_discs_keep_their_speed() {
     eprintln!(
         "speed along the motion: 7-px disc fast {small_fast:.3}, slow {small_slow:.3}; 60-px disc fast {large_fast:.3}"
     );
-    assert!(small_fast > 0.83 && small_slow > 0.93 && large_fast > 0.95, "{small_fast} {small_slow} {large_fast}");
+    assert!(small_fast > 0.87 && small_slow > 0.93 && large_fast > 0.95, "{small_fast} {small_slow} {large_fast}");
 }

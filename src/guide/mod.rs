@@ -75,8 +75,9 @@ pub struct GuideParams {
     /// σ of the temporal Gaussian applied to distance fields before the flow is estimated
     /// (`--time-blur-sigma`), frames. Default: 2 (thesis).
     pub time_blur_sigma: f32,
-    /// Radius, in frames, of the temporal Gaussian applied to the flow sequence (σ = radius / 3).
-    /// Default: 3 (paper, Appendix A).
+    /// Radius, in frames, of the temporal Gaussian applied to the flow sequence (σ = radius / 3),
+    /// centred half a frame ahead (see [`flow`], step 5; 0 is taken as 1, the mean of the
+    /// velocities of the frame and the next). Default: 3 (paper, Appendix A).
     pub flow_time_radius: usize,
     /// Completes the boundary flow with a tangential component from an affine motion fitted to
     /// each connected part of the mask (see [`flow`]); `false` keeps the paper's purely normal
@@ -162,7 +163,7 @@ impl GuideParams {
     /// field's slope, its unobserved modes fitted rigid.
     pub fn fingerprint(&self) -> String {
         format!(
-            "guides-v4 blur={} thr={} tblur={} frad={} tan={} tol={}",
+            "guides-v5 blur={} thr={} tblur={} frad={} tan={} tol={}",
             self.blur_sigma,
             self.mask_threshold,
             self.time_blur_sigma,
