@@ -714,9 +714,9 @@ fn smooth_in_time(
 }
 
 /// The flow `f` at the image position `q`, interpolated bilinearly over the pixels of the four
-/// around it that lie in `m`; `None` when none does.
+/// around it that lie in `m`; `None` when none does (or `q` is off the image or not finite).
 fn sample_inside(m: &FrameMask, f: &Crop<Vec2>, q: Vec2) -> Option<Vec2> {
-    if q.x < 0.0 || q.y < 0.0 {
+    if !(q.x >= 0.0 && q.y >= 0.0 && q.x < m.w as f32 && q.y < m.h as f32) {
         return None;
     }
     let (x0, y0) = (q.x.floor() as usize, q.y.floor() as usize);
@@ -965,6 +965,31 @@ impl FlowMachine {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn samples_along_the_motion_only_inside_the_mask() {
+        // A 10 × 8 image whose mask holds columns 2..6 of rows 1..5; the flow's x is the column.
+        let (w, h) = (10, 8);
+        let mut full = Crop::new(Rect::full(w, h));
+        let mut flow = Crop::new(Rect::full(w, h));
+        for y in 1..5 {
+            for x in 2..6 {
+                full.plane.set(x, y, true);
+                flow.plane.set(x, y, Vec2::new(x as f32, 1.0));
+            }
+        }
+        let m = FrameMask::from_crop(w, h, &full);
+        // Between four inside pixels: bilinear.
+        let v = sample_inside(&m, &flow, Vec2::new(3.25, 2.5)).unwrap();
+        assert!((v - Vec2::new(3.25, 1.0)).length() < 1e-5, "{v:?}");
+        // Half outside: only the inside pixels count (column 5 weighs alone past the edge).
+        let v = sample_inside(&m, &flow, Vec2::new(5.5, 2.0)).unwrap();
+        assert!((v - Vec2::new(5.0, 1.0)).length() < 1e-5, "{v:?}");
+        // Wholly outside, off the image, or not a number: nothing.
+        for q in [Vec2::new(7.5, 2.0), Vec2::new(-0.5, 2.0), Vec2::new(1e30, 2.0), Vec2::new(f32::NAN, 2.0)] {
+            assert!(sample_inside(&m, &flow, q).is_none(), "{q:?}");
+        }
+    }
 
     #[test]
     fn affine_fit_recovers_translation_and_growth() {
