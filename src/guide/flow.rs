@@ -212,9 +212,6 @@ struct Task {
 
 const NO: u32 = u32::MAX;
 
-/// Temporal weights over a task's frames: (slot, weight) pairs.
-type Kernel = Vec<(usize, f32)>;
-
 /// How a boundary pixel's normal speed is measured ([`Task::estimate_at`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Estimate {
@@ -248,9 +245,10 @@ impl Task {
         self.rows[slot].as_ref().map_or(0.0, |r| r[idx])
     }
 
-    fn smoothed(&self, weights: &[(usize, f32)], idx: usize) -> f32 {
+    /// `Σ g · sample(slot, idx)` over a kernel's (slot, weight) pairs.
+    fn smoothed(&self, weights: impl Iterator<Item = (usize, f32)>, idx: usize) -> f32 {
         let mut acc = 0f32;
-        for &(s, g) in weights {
+        for (s, g) in weights {
             acc += g * self.sample(s, idx);
         }
         acc
@@ -320,11 +318,16 @@ impl Task {
     /// The kernel of `D̃_{j+s}` over `k = −r ..= r` around frame `j + s` (`s ∈ {−1, 0, 1}`),
     /// as (slot, weight): the whole temporal Gaussian for `r = rt`, else cut and normalized
     /// again.
-    fn kernel(&self, cfg: &FlowConfig, r: usize, s: isize) -> Kernel {
+    fn kernel<'a>(
+        &'a self,
+        cfg: &'a FlowConfig,
+        r: usize,
+        s: isize,
+    ) -> impl Iterator<Item = (usize, f32)> + Clone + 'a {
         let rt = cfg.rt;
         let taps = rt - r..=rt + r;
         let sum: f32 = if r == rt { 1.0 } else { cfg.kt[taps.clone()].iter().sum() };
-        taps.map(|t| (self.kslots[(t as isize + s) as usize], cfg.kt[t] / sum)).collect()
+        taps.map(move |t| (self.kslots[(t as isize + s) as usize], cfg.kt[t] / sum))
     }
 
     /// The normal speed and the outward normal at a boundary pixel, and whether the speed was
@@ -337,13 +340,13 @@ impl Task {
         };
         let field = |s: isize| {
             let w = self.kernel(cfg, r, s);
-            let v = self.smoothed(&w, nb[0] as usize);
-            (v, gradient(nb, v, |i| self.smoothed(&w, i)))
+            let v = self.smoothed(w.clone(), nb[0] as usize);
+            (v, gradient(nb, v, |i| self.smoothed(w.clone(), i)))
         };
-        let (_, g) = field(0);
-        let len = g.length();
-        let n = if len > 1e-6 { -g / len } else { Vec2::ZERO };
-        let (d0, g0) = field(before);
+        let here = field(0);
+        let len = here.1.length();
+        let n = if len > 1e-6 { -here.1 / len } else { Vec2::ZERO };
+        let (d0, g0) = if before == 0 { here } else { field(before) };
         let (d1, g1) = field(after);
         // A field that moves by v changes by |∇D̃|·(n·v): a temporal average of distance fields
         // whose normals disagree has |∇D̃| < 1, so its change is divided by it.
