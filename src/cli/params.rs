@@ -101,7 +101,9 @@ pub struct SynthFlags {
     pub no_thin_fit: bool,
     /// Switch one part of the method off, to see what it does (repeatable): direction-rule
     /// (patches unrotated), time-shift (no SHIFTNNF), segments (interior and border patches
-    /// mixed), advection (no residual advection or rim re-anchoring), extent-normalization
+    /// mixed), segment-snap (an inherited match that lands just outside its pixel's segment
+    /// is dropped, as in the paper, instead of moved the least distance into it), advection
+    /// (no residual advection or rim re-anchoring), extent-normalization
     /// (raw target extents, as in the paper), extent-falloff (the extents weigh as much deep
     /// inside a shape as at its edge, as in the paper), carried-rim (in the border band the
     /// merge of the carried and the up-scaled field picks the match with the smaller error, as
@@ -143,6 +145,7 @@ pub enum Part {
     DirectionRule,
     TimeShift,
     Segments,
+    SegmentSnap,
     Advection,
     ExtentNormalization,
     ExtentFalloff,
@@ -245,6 +248,7 @@ impl SynthFlags {
                 Part::DirectionRule => b.direction_rule(false),
                 Part::TimeShift => b.time_shift(false),
                 Part::Segments => b.segments(false),
+                Part::SegmentSnap => b.segment_snap(false),
                 Part::Advection => b.advect(false),
                 Part::ExtentNormalization => b.ext_normalize(false),
                 Part::ExtentFalloff => b.extent_falloff(false),
@@ -455,7 +459,7 @@ mod tests {
         assert_eq!(p, flags.params().unwrap());
         // Every part named by `--without` is switched off.
         let all_on = SynthFlags { without: Vec::new(), ..flags }.params().unwrap().to_builder();
-        let off = all_on.direction_rule(false).time_shift(false).segments(false).advect(false);
+        let off = all_on.direction_rule(false).time_shift(false).segments(false).segment_snap(false).advect(false);
         let off = off.ext_normalize(false).extent_falloff(false).carried_rim(false).carried_estimate(false);
         let off = off.finest_uniformity(false);
         let off =

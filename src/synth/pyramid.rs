@@ -370,12 +370,16 @@ fn mirror(i: isize, n: usize) -> usize {
 /// indices and centers clamped into the valid margin (centers may have drifted out through
 /// up-scaling or the time shift; θ is kept, as the paper keeps it through UPSCALENNF and
 /// SHIFTNNF), and a match whose center is not a valid center of its target pixel's segment
-/// (border or interior) is dropped, as the search would never have chosen it. Matches of
+/// (border or interior) is moved the least distance onto one, within the eight pixels around
+/// its own ([`ParamsBuilder::segment_snap`](super::ParamsBuilder::segment_snap)), or dropped
+/// where none of them is one (or the snap is off), as the search would never have chosen it.
+/// Matches of
 /// inactive pixels are dropped too.
 fn sanitize(ctx: &Ctx, nnf: &mut Nnf) {
     let src = ctx.src;
     let (xmax, ymax) = ((src.w - 1 - MARGIN) as f32, (src.h - 1 - MARGIN) as f32);
     let last = (src.frames - 1) as u16;
+    let snap = ctx.params.parts.segment_snap;
     nnf.data.par_iter_mut().enumerate().for_each(|(q, m)| {
         if ctx.tgt.info[q].flags & source::VALID == 0 {
             *m = Match::NONE;
@@ -386,11 +390,41 @@ fn sanitize(ctx: &Ctx, nnf: &mut Nnf) {
             m.y = m.y.clamp(MARGIN as f32, ymax);
             m.i = m.i.min(last);
             m.err = f32::INFINITY;
-            if ctx.check(ctx.wanted_segment(q), m.i as usize, m.x, m.y).is_none() {
-                *m = Match::NONE;
+            let seg = ctx.wanted_segment(q);
+            if ctx.check(seg, m.i as usize, m.x, m.y).is_some() {
+                return;
+            }
+            match snap.then(|| nearest_valid(ctx, seg, m, (xmax, ymax))).flatten() {
+                Some((x, y)) => (m.x, m.y) = (x, y),
+                None => *m = Match::NONE,
             }
         }
     });
+}
+
+/// The point nearest to match `m`'s center that lies in one of the eight pixels around its own
+/// and is a valid center of segment `seg` (inside the valid margin, whose far corner is
+/// `max`): the least move that makes the match usable ([`sanitize`]). Ties go to the first
+/// pixel in a fixed order, so the result does not depend on the threads.
+fn nearest_valid(ctx: &Ctx, seg: Option<usize>, m: &Match, max: (f32, f32)) -> Option<(f32, f32)> {
+    // A pixel's cell is [n − ½, n + ½) (`SourceLevel::nearest`); a point moved into it stays
+    // this far inside, clear of rounding.
+    const INSET: f32 = 1.0 / 64.0;
+    let (rx, ry) = ((m.x + 0.5).floor(), (m.y + 0.5).floor());
+    let mut best: Option<(f32, (f32, f32))> = None;
+    for (dx, dy) in
+        [(0.0, -1.0), (-1.0, 0.0), (1.0, 0.0), (0.0, 1.0), (-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)]
+    {
+        let (nx, ny) = (rx + dx, ry + dy);
+        let x = m.x.clamp(nx - 0.5 + INSET, nx + 0.5 - INSET);
+        let y = m.y.clamp(ny - 0.5 + INSET, ny + 0.5 - INSET);
+        let inside = (MARGIN as f32..=max.0).contains(&x) && (MARGIN as f32..=max.1).contains(&y);
+        let d = (x - m.x).powi(2) + (y - m.y).powi(2);
+        if inside && best.is_none_or(|(b, _)| d < b) && ctx.check(seg, m.i as usize, x, y).is_some() {
+            best = Some((d, (x, y)));
+        }
+    }
+    best.map(|(_, p)| p)
 }
 
 /// Gives every active pixel without a match one: the first of its four neighbours' matches,

@@ -438,3 +438,50 @@ fn paint_ages_one_frame_at_least() {
         assert!(jump.iter().all(|&i| i > 6), "aged keeps the jump, speed {speed}: {jump:?}");
     }
 }
+
+/// Of the in-mask pixels of a disc translating by (2.3, 1.4) px a frame (no whole-pixel
+/// motion) that have a carried match (SHIFTNNF), the share whose final match
+/// is the carried one or lies within 1.5 px of it in the same exemplar frame, over frames
+/// 2–6; with the segment snap on or off.
+fn carried_share_kept(snap: bool) -> f64 {
+    let (rgb, g) = disc_exemplar(64, 64, 8, 5);
+    let params = Params::builder().seed(13).segment_snap(snap).build().unwrap();
+    let source = Source::from_parts(&rgb, &g, &params, 6.0).unwrap();
+    let mut s = Synthesizer::new(source, params).unwrap();
+    s.set_debug(true);
+    let (w, h, r, v) = (112usize, 64usize, 16.0f32, Vec2::new(2.3, 1.4));
+    let (mut carried, mut kept) = (0usize, 0usize);
+    for k in 0..6 {
+        let c = Vec2::new(30.0, 26.0) + v * k as f32;
+        let dist = Plane::from_fn(w, h, |x, y| r - (Vec2::new(x as f32, y as f32) - c).length());
+        let mask = dist.map(|d| d >= 0.0);
+        let zero = Plane::filled(w, h, 0.0f32);
+        let t = FrameGuides { mask, dist, flow: Plane::filled(w, h, v), ext_pos: zero.clone(), ext_neg: zero };
+        let views = s.step(&t).unwrap().debug.unwrap();
+        if k == 0 {
+            continue;
+        }
+        for y in 0..h {
+            for x in 0..w {
+                let (a, b) = (views.shifted.get(x, y), views.field.get(x, y));
+                if !t.mask.get(x, y) || a[0].is_nan() {
+                    continue;
+                }
+                carried += 1;
+                kept += (a[0] == b[0] && (a[1] - b[1]).hypot(a[2] - b[2]) <= 1.5) as usize;
+            }
+        }
+    }
+    kept as f64 / carried.max(1) as f64
+}
+
+/// A match carried by a fractional motion that lands just outside its segment is moved back
+/// into it instead of dropped ([`ParamsBuilder::segment_snap`]): more of the carried paint is
+/// still there in the final field. Measured: 0.968 with the snap, 0.934 without (the rest
+/// replaced by other matches); floor +0.02.
+#[test]
+fn carried_paint_is_not_dropped_for_landing_a_pixel_outside_its_segment() {
+    let (on, off) = (carried_share_kept(true), carried_share_kept(false));
+    eprintln!("carried matches kept: snap on {on:.4}, off {off:.4}");
+    assert!(on >= off + 0.02, "snap on {on:.4}, off {off:.4}");
+}
