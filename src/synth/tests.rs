@@ -69,8 +69,16 @@ fn psnr(a: &Plane<Rgb>, b: &Plane<Rgb>, mask: &Mask) -> f64 {
 /// A synthesizer with default parameters (seed `seed`) on a 64 × 64 [`disc_exemplar`] of
 /// `frames` frames (noise seed `ex_seed`, border width 6), and that exemplar.
 fn disc_synthesizer(frames: usize, ex_seed: u64, seed: u64) -> (Synthesizer, Vec<Plane<Rgb>>, Vec<FrameGuides>) {
+    disc_synthesizer_with(frames, ex_seed, Params::builder().seed(seed).build().unwrap())
+}
+
+/// [`disc_synthesizer`] with the parameters `params`.
+fn disc_synthesizer_with(
+    frames: usize,
+    ex_seed: u64,
+    params: Params,
+) -> (Synthesizer, Vec<Plane<Rgb>>, Vec<FrameGuides>) {
     let (rgb, g) = disc_exemplar(64, 64, frames, ex_seed);
-    let params = Params::builder().seed(seed).build().unwrap();
     let source = Source::from_parts(&rgb, &g, &params, 6.0).unwrap();
     (Synthesizer::new(source, params).unwrap(), rgb, g)
 }
@@ -190,11 +198,11 @@ fn rotations_align_source_and_target_flows() {
 
 /// Guides of a disc (radius r) translating by `v` px per frame along x, at frame k: a uniform
 /// flow and no change of extent (the paint neither spreads nor recedes).
-fn translating_disc(w: usize, h: usize, c0: Vec2, r: f32, v: f32, k: usize) -> FrameGuides {
-    let c = c0 + Vec2::new(v * k as f32, 0.0);
+fn translating_disc(w: usize, h: usize, c0: Vec2, r: f32, v: Vec2, k: usize) -> FrameGuides {
+    let c = c0 + v * k as f32;
     let dist = Plane::from_fn(w, h, |x, y| r - (Vec2::new(x as f32, y as f32) - c).length());
     let mask = dist.map(|d| d >= 0.0);
-    let flow = Plane::filled(w, h, Vec2::new(v, 0.0));
+    let flow = Plane::filled(w, h, v);
     let zero = Plane::filled(w, h, 0.0f32);
     FrameGuides { mask, dist, flow, ext_pos: zero.clone(), ext_neg: zero }
 }
@@ -204,7 +212,7 @@ fn translating_disc(w: usize, h: usize, c0: Vec2, r: f32, v: f32, k: usize) -> F
 fn translating_views(c0: Vec2, r: f32, v: f32) -> (Vec<FrameGuides>, Vec<DebugViews>) {
     let (mut s, _, _) = disc_synthesizer(8, 5, 13);
     s.set_debug(true);
-    let target: Vec<FrameGuides> = (0..3).map(|k| translating_disc(112, 64, c0, r, v, k)).collect();
+    let target: Vec<FrameGuides> = (0..3).map(|k| translating_disc(112, 64, c0, r, Vec2::new(v, 0.0), k)).collect();
     let views = target.iter().map(|t| s.step(t).unwrap().debug.unwrap()).collect();
     (target, views)
 }
@@ -444,19 +452,13 @@ fn paint_ages_one_frame_at_least() {
 /// is the carried one or lies within 1.5 px of it in the same exemplar frame, over frames
 /// 2–6; with the segment snap on or off.
 fn carried_share_kept(snap: bool) -> f64 {
-    let (rgb, g) = disc_exemplar(64, 64, 8, 5);
     let params = Params::builder().seed(13).segment_snap(snap).build().unwrap();
-    let source = Source::from_parts(&rgb, &g, &params, 6.0).unwrap();
-    let mut s = Synthesizer::new(source, params).unwrap();
+    let (mut s, _, _) = disc_synthesizer_with(8, 5, params);
     s.set_debug(true);
-    let (w, h, r, v) = (112usize, 64usize, 16.0f32, Vec2::new(2.3, 1.4));
+    let (w, h) = (112, 64);
     let (mut carried, mut kept) = (0usize, 0usize);
     for k in 0..6 {
-        let c = Vec2::new(30.0, 26.0) + v * k as f32;
-        let dist = Plane::from_fn(w, h, |x, y| r - (Vec2::new(x as f32, y as f32) - c).length());
-        let mask = dist.map(|d| d >= 0.0);
-        let zero = Plane::filled(w, h, 0.0f32);
-        let t = FrameGuides { mask, dist, flow: Plane::filled(w, h, v), ext_pos: zero.clone(), ext_neg: zero };
+        let t = translating_disc(w, h, Vec2::new(30.0, 26.0), 16.0, Vec2::new(2.3, 1.4), k);
         let views = s.step(&t).unwrap().debug.unwrap();
         if k == 0 {
             continue;
