@@ -291,6 +291,10 @@ fn boundary_term_keeps_the_sliding_paint_textured() {
     // again, +0.018); sliding contrast 1.003 with, 0.885 without (+0.118), and with the tone
     // match 1.029 and 1.004 (+0.024: the carried paint the snap keeps holds the texture the
     // term used to restore). The floor with the tone match is now +0.01; the others stay.
+    // Since a moving shape's paint is carried with all of its motion
+    // (`ParamsBuilder::full_carry`, fifth session of 2026-12-06): rims 0.094 and 0.074 with the
+    // term, 0.088 and 0.057 without (+0.017); sliding contrast 0.995 with, 0.873 without
+    // (+0.122), with the tone match 1.021 and 0.999 (+0.022).
     let (_, g, l) = row("no tone match");
     let (_, g0, l0) = row("no boundary term, no tone match");
     let (_, _, full) = row("full method");
@@ -338,6 +342,10 @@ fn tone_match_gives_the_band_the_exemplars_density() {
     // that: with the tone match its edge darkening is at least as close to the exemplar's
     // (within 0.01; measured 0.055 off against 0.094). The still's palette bound is now 0.008
     // (measured +0.006; it was 0.006).
+    //
+    // Since a moving shape's paint is carried with all of its motion
+    // (`ParamsBuilder::full_carry`, fifth session of 2026-12-06) only the sliding disc's rim
+    // without the tone match moves: 0.078 → 0.074 (+0.015 with it); the rest is the same.
     let (s, g, l) = row("full");
     let (s0, g0, l0) = row("no tone match");
     let what = format!(
@@ -531,7 +539,9 @@ fn segments_keep_border_paint_at_the_border() {
 /// smoothed along the motion (third session of 2026-12-06): 0.836 and 0.582 (+0.25). With an
 /// inherited match moved into its segment instead of dropped (`ParamsBuilder::segment_snap`,
 /// fourth session of 2026-12-06): 0.815 and 0.614 (+0.20). Floors: 0.78 with (0.035 below the
-/// measured) and 0.17 more than without (0.03 below the measured +0.20; it was 0.2).
+/// measured) and 0.17 more than without (0.03 below the measured +0.20; it was 0.2). With a
+/// moving shape's paint carried with all of its motion (`ParamsBuilder::full_carry`, fifth
+/// session of 2026-12-06): 0.884 and 0.617 (+0.27).
 #[test]
 fn direction_rule_turns_the_spreading_to_face_the_motion() {
     let masks = sliding();

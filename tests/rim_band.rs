@@ -94,7 +94,10 @@ fn band_change(name: &str) -> [(f32, f32); 2] {
 /// 0.0221 → 0.0175 (0.79×) and 0.0548 → 0.0238 (0.43×); blue-swatch's bands change less than
 /// without it (0.022 → 0.019 and 0.018 → 0.018, a scratch run). Moved by a whole pixel instead, to the
 /// first valid one of the eight around it in a fixed order, blue-swatch's bottom band read
-/// 0.0124 → 0.0155 (1.25×): the matches drifted the way that order leans.
+/// 0.0124 → 0.0155 (1.25×): the matches drifted the way that order leans. With a moving
+/// shape's paint carried with all of its motion (`ParamsBuilder::full_carry`, fifth session of
+/// 2026-12-06): green-wash 0.0221 → 0.0171 (0.78×) and 0.0548 → 0.0231 (0.42×); blue-swatch,
+/// a still, unchanged.
 #[test]
 fn a_slowly_moving_shape_keeps_its_rim_band() {
     let mut failures = Vec::new();

@@ -124,7 +124,9 @@ pub struct SynthFlags {
     /// frames),
     /// pace (a moving shape's
     /// paint runs through as many exemplar frames per frame as its motion asks, as in the
-    /// paper: a fast limb ages its paint several frames at a time and boils), contrast-balance (the
+    /// paper: a fast limb ages its paint several frames at a time and boils), full-carry (a
+    /// moving shape's exemplar time steps supply part of its motion, as in the paper: its
+    /// paint's texture lags behind the shape and boils), contrast-balance (the
     /// occurrence penalty spreads the use over the exemplar's positions only, as in the paper,
     /// and the search drifts to the exemplar's flattest paint; same as --contrast-balance 0),
     /// grain-phase (the grain of a patch that lands between exemplar pixels keeps only what
@@ -156,6 +158,7 @@ pub enum Part {
     RecedingHold,
     Aging,
     Pace,
+    FullCarry,
     ContrastBalance,
     GrainPhase,
     ToneMatch,
@@ -259,6 +262,7 @@ impl SynthFlags {
                 Part::RecedingHold => b.receding_hold(false),
                 Part::Aging => b.aging(false),
                 Part::Pace => b.pace(false),
+                Part::FullCarry => b.full_carry(false),
                 Part::ContrastBalance => b.contrast_balance(0.0),
                 Part::GrainPhase => b.grain_phase(false),
                 Part::ToneMatch => b.tone_match(false),
@@ -463,7 +467,8 @@ mod tests {
         let off = off.ext_normalize(false).extent_falloff(false).carried_rim(false).carried_estimate(false);
         let off = off.finest_uniformity(false);
         let off =
-            off.settle(false).receding_hold(false).aging(false).pace(false).contrast_balance(0.0).grain_phase(false);
+            off.settle(false).receding_hold(false).aging(false).pace(false).full_carry(false).contrast_balance(0.0);
+        let off = off.grain_phase(false);
         let off = off.tone_match(false).repaint_first(false).turn(false).build().unwrap();
         assert_eq!(p, off);
     }

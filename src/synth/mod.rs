@@ -638,6 +638,7 @@ fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevS
         age: p.parts.aging,
         hold_time,
         max_step: if moves && p.parts.pace && p.parts.advect { 1 } else { usize::MAX },
+        full_carry: moves && p.parts.full_carry,
         turn: p.turns(src.levels[0].frames),
     };
     shift::shift_nnf(&inputs, &prev.nnf0)

@@ -108,6 +108,7 @@ pub(crate) struct Parts {
     pub receding_hold: bool,
     pub aging: bool,
     pub pace: bool,
+    pub full_carry: bool,
     pub keep_grain: bool,
     pub grain_phase: bool,
     pub tone_match: bool,
@@ -133,6 +134,7 @@ impl Default for Parts {
             receding_hold: true,
             aging: true,
             pace: true,
+            full_carry: true,
             keep_grain: true,
             grain_phase: true,
             tone_match: true,
@@ -629,6 +631,28 @@ impl ParamsBuilder {
     /// Default: on.
     pub fn pace(mut self, on: bool) -> Self {
         self.p.parts.pace = on;
+        self
+    }
+
+    /// A moving shape's paint is carried with all of its motion (SHIFTNNF, module `shift`):
+    /// where the shape moves rather than grows from one frame to the next (a translating,
+    /// turning or swinging part; [`Self::pace`]), the exemplar's time step only ages the paint,
+    /// and the advection carries the whole target motion. The paper lets the time step supply
+    /// the motion: a match that steps from frame i to i + Δi shows what the exemplar's flow
+    /// brought to its position, and only the rest is carried (with [`Self::advect`]). But the
+    /// exemplar's flow is its outline's spread, diffused inwards; its paint's texture — the
+    /// grain, the pigment's blotches — does not travel with it. Supplied by the time step, the
+    /// motion let the texture lag behind the shape by the exemplar's speed at each match,
+    /// unevenly from match to match: on the swinging limb (ink-rims, 24 frames, 512², `synth
+    /// --debug`) the shifted field lagged the exact motion by 0.7–1.0 px a frame at its fastest
+    /// and only 0.37 of its pixels continued the previous frame's match within ½ px (0.46
+    /// with this). Where the shape grows, its front is new paint and the paper's rule holds.
+    /// The carried paint then dries where it lies: in a thin part's middle the exemplar's
+    /// bloom spreads around it, so it ages into deeper, paler paint (the tone match brings the
+    /// density back, not the blotches' spread; the README's quality section). Not in the
+    /// paper. Off = the time step supplies the motion it stands for. Default: on.
+    pub fn full_carry(mut self, on: bool) -> Self {
+        self.p.parts.full_carry = on;
         self
     }
 

@@ -51,6 +51,9 @@ pub(crate) struct ShiftInputs<'a> {
     /// unbounded (`usize::MAX`) is the paper's rule; 1 where the shape moves rather than grows
     /// ([`super::ParamsBuilder::pace`]).
     pub max_step: usize,
+    /// The time step supplies none of the motion: the advection carries all of it (where the
+    /// shape moves rather than grows; [`super::ParamsBuilder::full_carry`]).
+    pub full_carry: bool,
     /// The exemplar is a still: every carried match turns with the target's local rotation
     /// ([`flow_turn`]) — where the field is carried along the motion (with the time shift and
     /// the advection; without them nothing is carried, and nothing turns).
@@ -283,7 +286,9 @@ fn moved(src: &SourceLevel, m: &Match, x: f32, y: f32) -> Option<Match> {
 /// pixel `p = q − rest·f̂` (f the target flow, `rest` the motion beyond what the exemplar's
 /// evolution supplied at q's match), offset by `M·(p − ⌊p⌉)` for the sub-pixel part: q shows
 /// what was that far behind it (the exemplar's evolution carries as much of the motion as it
-/// can, the warp the rest; when the exemplar runs out of frames, all of it). Where `⌊p⌉` had
+/// can, the warp the rest; when the exemplar runs out of frames, all of it; where the shape
+/// moves rather than grows, with [`ShiftInputs::full_carry`], all of it too: the time step
+/// only ages the paint). Where `⌊p⌉` had
 /// no match (paint that was not there), q's own match is moved upstream in the exemplar by
 /// `M·rest·f̂` instead. Within a coherent piece of the field the two are the same; across
 /// pieces the warp keeps each piece whole — moving every match in the exemplar by its own
@@ -315,6 +320,7 @@ pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
             *o = *m;
             return;
         };
+        let supplied = if inp.full_carry { 0.0 } else { supplied };
         if !inp.advect {
             *o = Match { i: best_i as u16, err: f32::INFINITY, ..*m };
             return;
