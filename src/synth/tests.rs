@@ -207,14 +207,25 @@ fn translating_disc(w: usize, h: usize, c0: Vec2, r: f32, v: Vec2, k: usize) -> 
     FrameGuides { mask, dist, flow, ext_pos: zero.clone(), ext_neg: zero }
 }
 
-/// Three frames of a disc (radius r, from c0) translating by `v` px per frame on a 112×64
-/// target, synthesized from the small disc exemplar: the guides and the debug views.
-fn translating_views(c0: Vec2, r: f32, v: f32) -> (Vec<FrameGuides>, Vec<DebugViews>) {
-    let (mut s, _, _) = disc_synthesizer(8, 5, 13);
+/// `frames` frames of a disc (radius r, from c0) translating by `v` px per frame on a 112×64
+/// target, synthesized from the small disc exemplar with `params`: each frame's guides and
+/// debug views.
+fn translating_run(params: Params, c0: Vec2, r: f32, v: Vec2, frames: usize) -> Vec<(FrameGuides, DebugViews)> {
+    let (mut s, _, _) = disc_synthesizer_with(8, 5, params);
     s.set_debug(true);
-    let target: Vec<FrameGuides> = (0..3).map(|k| translating_disc(112, 64, c0, r, Vec2::new(v, 0.0), k)).collect();
-    let views = target.iter().map(|t| s.step(t).unwrap().debug.unwrap()).collect();
-    (target, views)
+    (0..frames)
+        .map(|k| {
+            let t = translating_disc(112, 64, c0, r, v, k);
+            let views = s.step(&t).unwrap().debug.unwrap();
+            (t, views)
+        })
+        .collect()
+}
+
+/// Three frames of a disc (radius r, from c0) translating by `v` px per frame along x
+/// ([`translating_run`], seed 13): the guides and the debug views.
+fn translating_views(c0: Vec2, r: f32, v: f32) -> (Vec<FrameGuides>, Vec<DebugViews>) {
+    translating_run(Params::builder().seed(13).build().unwrap(), c0, r, Vec2::new(v, 0.0), 3).into_iter().unzip()
 }
 
 /// Of the pairs of horizontally or vertically neighbouring pixels within `keep` that both have
@@ -454,16 +465,10 @@ fn paint_ages_one_frame_at_least() {
 /// 2–6; with the segment snap on or off.
 fn carried_share_kept(snap: bool) -> f64 {
     let params = Params::builder().seed(13).segment_snap(snap).build().unwrap();
-    let (mut s, _, _) = disc_synthesizer_with(8, 5, params);
-    s.set_debug(true);
-    let (w, h) = (112, 64);
+    let run = translating_run(params, Vec2::new(30.0, 26.0), 16.0, Vec2::new(2.3, 1.4), 6);
     let (mut carried, mut kept) = (0usize, 0usize);
-    for k in 0..6 {
-        let t = translating_disc(w, h, Vec2::new(30.0, 26.0), 16.0, Vec2::new(2.3, 1.4), k);
-        let views = s.step(&t).unwrap().debug.unwrap();
-        if k == 0 {
-            continue;
-        }
+    for (t, views) in &run[1..] {
+        let (w, h) = t.mask.size();
         for y in 0..h {
             for x in 0..w {
                 let (a, b) = (views.shifted.get(x, y), views.field.get(x, y));
@@ -489,39 +494,35 @@ fn carried_paint_is_not_dropped_for_landing_a_pixel_outside_its_segment() {
     assert!(on >= off + 0.02, "snap on {on:.4}, off {off:.4}");
 }
 
-/// Of a translating disc's carried matches deeper than the border band (frames 2–5), the share
+/// Of a translating disc's carried matches deeper than the border band (frames 3–6), the share
 /// that lie where the exact motion puts the previous frame's match: the match at `⌊p⌉`,
 /// `p = q − v`, offset by `M·(p − ⌊p⌉)` (within ¼ px).
 fn carried_with_the_motion(full_carry: bool) -> f64 {
     let params = Params::builder().seed(13).full_carry(full_carry).build().unwrap();
-    let (mut s, _, _) = disc_synthesizer_with(8, 5, params);
-    s.set_debug(true);
-    let (w, h, v) = (112, 64, Vec2::new(2.3, 1.4));
-    let (mut prev, mut deep, mut exact) = (None::<Plane<[f32; 4]>>, 0usize, 0usize);
-    for k in 0..6 {
-        let t = translating_disc(w, h, Vec2::new(30.0, 26.0), 18.0, v, k);
-        let views = s.step(&t).unwrap().debug.unwrap();
-        if let Some(before) = prev.as_ref().filter(|_| k >= 2) {
-            for y in 0..h {
-                for x in 0..w {
-                    let now = views.shifted.get(x, y);
-                    if t.dist.get(x, y) < 8.0 || now[0].is_nan() {
-                        continue;
-                    }
-                    let p = Vec2::new(x as f32, y as f32) - v;
-                    let r = p.round();
-                    let m = before.get(r.x as usize, r.y as usize);
-                    if m[0].is_nan() {
-                        continue;
-                    }
-                    deep += 1;
-                    let (c, sn, o) = (m[3].cos(), m[3].sin(), p - r);
-                    let want = (m[1] + c * o.x - sn * o.y, m[2] + sn * o.x + c * o.y);
-                    exact += ((now[1] - want.0).hypot(now[2] - want.1) <= 0.25) as usize;
+    let v = Vec2::new(2.3, 1.4);
+    let run = translating_run(params, Vec2::new(30.0, 26.0), 18.0, v, 6);
+    let (mut deep, mut exact) = (0usize, 0usize);
+    for pair in run[1..].windows(2) {
+        let (before, (t, views)) = (&pair[0].1.field, &pair[1]);
+        let (w, h) = t.mask.size();
+        for y in 0..h {
+            for x in 0..w {
+                let now = views.shifted.get(x, y);
+                if t.dist.get(x, y) < 8.0 || now[0].is_nan() {
+                    continue;
                 }
+                let p = Vec2::new(x as f32, y as f32) - v;
+                let r = p.round();
+                let m = before.get(r.x as usize, r.y as usize);
+                if m[0].is_nan() {
+                    continue;
+                }
+                deep += 1;
+                let (c, sn, o) = (m[3].cos(), m[3].sin(), p - r);
+                let want = (m[1] + c * o.x - sn * o.y, m[2] + sn * o.x + c * o.y);
+                exact += ((now[1] - want.0).hypot(now[2] - want.1) <= 0.25) as usize;
             }
         }
-        prev = Some(views.field);
     }
     assert!(deep > 1000, "{deep} deep carried matches");
     exact as f64 / deep as f64
