@@ -554,6 +554,13 @@ fn extent_term_tells_the_paint_s_age() {
 /// section, *A moving part's paint is carried with all of its motion*). Floors now: the two
 /// levels' mean at most 0.85× the six's (measured 0.79×; it was 0.75×), no limb beyond 0.2
 /// (measured at most 0.165; it was 0.15); closer on at least four of five, as before.
+///
+/// With a thin part graded to its middle (b lowered to its thickness, 6.5 px, both runs;
+/// sixth session of 2026-12-06; seed 1, printed): blue-bloom 0.051 against 0.129, green-wash
+/// 0.083 against 0.222, ink-rims 0.065 against 0.191, rose-burst 0.093 against 0.132,
+/// yellow-granules 0.053 against 0.103 (two levels closer on all five, mean 0.069 against
+/// 0.155, 0.45×; at most 0.093). Floors now: the mean at most 0.6× (measured 0.45×), no limb
+/// beyond 0.12 (measured at most 0.093); closer on at least four of five, as before.
 #[test]
 fn thin_parts_take_the_exemplar_colors_at_their_depths() {
     let videos = ["blue-bloom", "green-wash", "ink-rims", "rose-burst", "yellow-granules"];
@@ -576,7 +583,7 @@ fn thin_parts_take_the_exemplar_colors_at_their_depths() {
         println!("{}: palette {pa:.4} with two levels, {pb:.4} with six", a.exemplar);
         closer += (pa <= 0.95 * pb) as usize;
         (sum_fitted, sum_six) = (sum_fitted + pa, sum_six + pb);
-        if pa > 0.2 {
+        if pa > 0.12 {
             failures.push(format!("{}: palette {pa:.4} with two levels", a.exemplar));
         }
     }
@@ -584,10 +591,23 @@ fn thin_parts_take_the_exemplar_colors_at_their_depths() {
     if closer < 4 {
         failures.push(format!("two levels closer on {closer} of {}", videos.len()));
     }
-    if sum_fitted > 0.85 * sum_six {
+    if sum_fitted > 0.6 * sum_six {
         failures.push(format!("mean palette {:.4} with two levels, {:.4} with six", sum_fitted / 5.0, sum_six / 5.0));
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The suite's swinging limb (24 frames, seed 1) painted with `params` and each of the four
+/// video exemplars whose limbs boiled.
+fn swinging_limbs(params: Params) -> SuiteReport {
+    suite(
+        SuiteOptions::default()
+            .exemplars(["blue-bloom", "green-wash", "ink-rims", "yellow-granules"])
+            .targets([TargetKind::Limb])
+            .identity(false)
+            .frames(24)
+            .params(params),
+    )
 }
 
 /// A moving part's paint is carried with all of its motion (`ParamsBuilder::full_carry`):
@@ -598,19 +618,13 @@ fn thin_parts_take_the_exemplar_colors_at_their_depths() {
 /// Measured (2026-12-06, printed): incoherent change blue-bloom 1.44 against 1.69, green-wash
 /// 1.07 against 2.09, ink-rims 1.39 against 1.38, yellow-granules 1.29 against 1.66 (mean
 /// 1.30 against 1.71, 0.76×; seed 2 1.29 against 1.54, 0.84×; over seeds 1–6 1.24 against
-/// 1.61). Floor: the mean at most 0.9× without.
+/// 1.61). With a thin part graded to its middle (sixth session of 2026-12-06, printed):
+/// blue-bloom 1.08 against 1.40, green-wash 1.21 against 1.41, ink-rims 1.17 against 1.38,
+/// yellow-granules 1.73 against 2.23 (mean 1.30 against 1.60, 0.81×). Floor: the mean at most
+/// 0.9× without.
 #[test]
 fn a_moving_part_does_not_boil() {
-    let run = |full_carry: bool| {
-        suite(
-            SuiteOptions::default()
-                .exemplars(["blue-bloom", "green-wash", "ink-rims", "yellow-granules"])
-                .targets([TargetKind::Limb])
-                .identity(false)
-                .frames(24)
-                .params(Params::builder().full_carry(full_carry).build().unwrap()),
-        )
-    };
+    let run = |full_carry: bool| swinging_limbs(Params::builder().full_carry(full_carry).build().unwrap());
     let mean = |r: &SuiteReport| {
         let v: Vec<f32> = r.rows.iter().map(|r| r.summary.incoherent_change_ratio.unwrap()).collect();
         (v.iter().sum::<f32>() / v.len() as f32, v)
@@ -622,6 +636,38 @@ fn a_moving_part_does_not_boil() {
     println!("{what}");
     assert_eq!(with_runs.len(), 4);
     assert!(with <= 0.9 * without, "{what}");
+}
+
+/// A thin part is graded to its middle (`Params::fit_to_thickness` lowers b to the part's
+/// thickness): its middle takes the exemplar's paint at its own depth instead of the bloom's
+/// deep, pale middle. The suite's swinging limb (a bar 14 px wide, 6.5 px thick, 512², 24
+/// frames, seed 1) with the four video exemplars whose limbs boiled, against the rule before
+/// (b = thickness / 1.5 = 4 px, so the middle 4–6.5 px in was interior; two pyramid levels
+/// either way). The palette distance is the exemplar's colors at the output's own depths.
+///
+/// Measured (sixth session of 2026-12-06, printed): blue-bloom 0.022 against 0.043, green-wash
+/// 0.035 against 0.079, ink-rims 0.035 against 0.049, yellow-granules 0.029 against 0.033
+/// (mean 0.030 against 0.051, 0.59×; the rule before gives exactly the previous engine's
+/// figures). Over seeds 1–6 (`quality`, the README): 0.031 against 0.047, while the
+/// incoherent change rises 1.24 → 1.33 (yellow-granules' fine granules 1.33 → 1.73).
+/// Floors: the mean at most 0.8× the rule before's, and closer on at least three of four
+/// (measured four).
+#[test]
+fn a_thin_part_takes_the_paint_of_its_depths() {
+    let palettes =
+        |r: &SuiteReport| -> Vec<f32> { r.rows.iter().map(|r| r.summary.palette_distance_mean.unwrap()).collect() };
+    let graded = swinging_limbs(Params::default());
+    let before = swinging_limbs(Params::builder().border_width(4.0).levels(2).build().unwrap());
+    for r in &graded.rows {
+        assert_eq!((r.border_width, r.max_levels), (6.5, Some(2)), "{}: the limb is fitted", r.exemplar);
+    }
+    let (a, b) = (palettes(&graded), palettes(&before));
+    let mean = |v: &[f32]| v.iter().sum::<f32>() / v.len() as f32;
+    let what = format!("limbs' palette {:.4} graded ({a:.4?}), {:.4} with b = 4 ({b:.4?})", mean(&a), mean(&b));
+    println!("{what}");
+    assert_eq!(a.len(), 4);
+    assert!(mean(&a) <= 0.8 * mean(&b), "{what}");
+    assert!(a.iter().zip(&b).filter(|(a, b)| a < b).count() >= 3, "{what}");
 }
 
 /// Paint ages (`ParamsBuilder::aging`, at every depth; this test reads the interior): over a

@@ -228,13 +228,28 @@ impl Params {
     /// border width is `exemplar_border` pixels (at the exemplar's scale in use).
     ///
     /// The thesis's σ = 8 and b ≈ 10–30 px suit shapes tens of pixels thick (the `horse`, 1000 ×
-    /// 800). A part only ~15 px wide is closed up and merged with its neighbours by that blur and
-    /// lies entirely within the border band, so it gets only the exemplar's pale rim texture —
-    /// thin limbs, scarves and strokes all but vanish. Here σ ≤ thickness / 2.5 and
-    /// b ≤ thickness / 1.5, so a thin part keeps its shape and has an interior of its own; thick
-    /// targets are unchanged. A part thin enough for b to be lowered also gets no more pyramid
+    /// 800). A part only ~15 px wide is closed up and merged with its neighbours by that blur, so
+    /// thin limbs, scarves and strokes all but vanish: here σ ≤ thickness / 2.5. And b is
+    /// lowered to the part's thickness (not below 4 px), so the border channel grades the
+    /// whole part, edge to middle, as it grades the exemplar's paint over the same depths;
+    /// thick targets are unchanged. A part thinner than 1.5 b also gets no more pyramid
     /// levels than keep it one patch across ([`Params::max_levels`]). Off when
     /// [`ParamsBuilder::fit_thin_layers`] is false.
+    ///
+    /// Until the sixth session of 2026-12-06 b was lowered to thickness / 1.5, to give the part
+    /// an interior of its own. But the interior segment matches any exemplar pixel deeper than
+    /// b alike, and most of them lie far inside the bloom: the middle of the quality suite's
+    /// limb (14 px across, 6.5 px thick, b = 4 px then, 6.5 now) took its paint from a median
+    /// 10–25 px deep in green-wash (`synth --debug`, seed 1, frames 1–24), where the paint's
+    /// pigment density is 0.25–0.37, while the exemplar's at the limb's own depths, 4–6 px, is
+    /// 0.77 — so pale that the tone match, bounded to 2×, could not bring it back, and calm
+    /// where the exemplar's paint there is blotchy. Graded to its middle, the limb takes the
+    /// exemplar's paint at its own depths: on that limb (24 frames, seeds 1–6, the four video
+    /// exemplars whose limbs boiled) the palette distance falls 0.047 → 0.031 and the runs
+    /// meeting the palette floor 3 → 10 of 24; incoherent change 1.24 → 1.33 (blue-bloom 1.20
+    /// → 1.16, ink-rims 1.39 → 1.14, green-wash 1.05 → 1.28, yellow-granules 1.33 → 1.73: its
+    /// granules are fine and change more where they are carried), runs meeting that floor
+    /// 9 → 11.
     pub fn fit_to_thickness(&self, thickness: f32, exemplar_border: f32) -> Params {
         let mut p = self.clone();
         if !(self.fit_thin && thickness.is_finite() && thickness > 0.0) {
@@ -248,10 +263,12 @@ impl Params {
         }
         // Not below 4 px: the rims of paint are ~2–4 px wide, and a border band narrower than
         // the rim would count rim pixels as interior (darker interiors).
-        let b = half(thickness / 1.5).max(4.0);
+        let b = half(thickness).max(4.0);
         let current = p.border_width.unwrap_or(exemplar_border);
         if b < current {
             p.border_width = Some(b);
+        }
+        if half(thickness / 1.5).max(4.0) < current {
             // A part this thin also loses the pyramid levels too coarse to hold it.
             p.schedule.max_levels = Some(levels_for_thickness(thickness));
         }
@@ -1066,7 +1083,7 @@ mod tests {
         assert_eq!(thin.guide().blur_sigma, 0.0, "no blur stays no blur");
         let blurred = Params::builder().blur_sigma(8.0).build().unwrap().fit_to_thickness(7.5, 12.0);
         assert_eq!(blurred.guide().blur_sigma, 3.0);
-        assert_eq!(thin.border_width(), Some(5.0));
+        assert_eq!(thin.border_width(), Some(7.5));
         assert!(thin.fit_to_thickness(7.5, 12.0) == thin);
         // 15 px across, three patches: at the third level it would be under one.
         assert_eq!(thin.max_levels(), Some(2));
