@@ -10,6 +10,7 @@
 //! margin, never by loosening a floor to make a regression pass.
 
 use fluidymation::NoProgress;
+use fluidymation::eval::Summary;
 use fluidymation::quality::{self, SuiteOptions, SuiteReport, TargetKind};
 use fluidymation::synth::Params;
 
@@ -17,6 +18,13 @@ fn suite(options: SuiteOptions) -> SuiteReport {
     let report = quality::run(&options, &NoProgress).unwrap();
     println!("{report}");
     report
+}
+
+/// One measure of every run of `report` (`measure` of its summary, which must have it) and
+/// their mean.
+fn runs_and_mean(report: &SuiteReport, measure: impl Fn(&Summary) -> Option<f32>) -> (f32, Vec<f32>) {
+    let v: Vec<f32> = report.rows.iter().map(|r| measure(&r.summary).unwrap()).collect();
+    (v.iter().sum::<f32>() / v.len() as f32, v)
 }
 
 /// The identity at full size, every bundled exemplar: the floors (PSNR ≥ 28 dB in every
@@ -494,8 +502,7 @@ fn extent_term_tells_the_paint_s_age() {
                 .frames(24)
                 .params(Params::builder().w_ext(w_ext).build().unwrap()),
         );
-        let p: Vec<f32> = report.rows.iter().map(|r| r.summary.palette_distance_mean.unwrap()).collect();
-        (p.iter().sum::<f32>() / p.len() as f32, p)
+        runs_and_mean(&report, |s| s.palette_distance_mean)
     };
     let ((with, with_runs), (without, without_runs)) = (palette(Params::default().w_ext()), palette(0.0));
     let what = format!(
@@ -625,10 +632,7 @@ fn swinging_limbs(params: Params) -> SuiteReport {
 #[test]
 fn a_moving_part_does_not_boil() {
     let run = |full_carry: bool| swinging_limbs(Params::builder().full_carry(full_carry).build().unwrap());
-    let mean = |r: &SuiteReport| {
-        let v: Vec<f32> = r.rows.iter().map(|r| r.summary.incoherent_change_ratio.unwrap()).collect();
-        (v.iter().sum::<f32>() / v.len() as f32, v)
-    };
+    let mean = |r: &SuiteReport| runs_and_mean(r, |s| s.incoherent_change_ratio);
     let ((with, with_runs), (without, without_runs)) = (mean(&run(true)), mean(&run(false)));
     let what = format!(
         "limbs' incoherent change {with:.3} with the full carry ({with_runs:.3?}), {without:.3} without ({without_runs:.3?})"
@@ -654,19 +658,17 @@ fn a_moving_part_does_not_boil() {
 /// (measured four).
 #[test]
 fn a_thin_part_takes_the_paint_of_its_depths() {
-    let palettes =
-        |r: &SuiteReport| -> Vec<f32> { r.rows.iter().map(|r| r.summary.palette_distance_mean.unwrap()).collect() };
     let graded = swinging_limbs(Params::default());
     let before = swinging_limbs(Params::builder().border_width(4.0).levels(2).build().unwrap());
     for r in &graded.rows {
         assert_eq!((r.border_width, r.max_levels), (6.5, Some(2)), "{}: the limb is fitted", r.exemplar);
     }
-    let (a, b) = (palettes(&graded), palettes(&before));
-    let mean = |v: &[f32]| v.iter().sum::<f32>() / v.len() as f32;
-    let what = format!("limbs' palette {:.4} graded ({a:.4?}), {:.4} with b = 4 ({b:.4?})", mean(&a), mean(&b));
+    let ((mean_a, a), (mean_b, b)) =
+        (runs_and_mean(&graded, |s| s.palette_distance_mean), runs_and_mean(&before, |s| s.palette_distance_mean));
+    let what = format!("limbs' palette {mean_a:.4} graded ({a:.4?}), {mean_b:.4} with b = 4 ({b:.4?})");
     println!("{what}");
     assert_eq!(a.len(), 4);
-    assert!(mean(&a) <= 0.8 * mean(&b), "{what}");
+    assert!(mean_a <= 0.8 * mean_b, "{what}");
     assert!(a.iter().zip(&b).filter(|(a, b)| a < b).count() >= 3, "{what}");
 }
 

@@ -664,10 +664,9 @@ impl ParamsBuilder {
     /// --debug`) the shifted field lagged the exact motion by 0.7–1.0 px a frame at its fastest
     /// and only 0.37 of its pixels continued the previous frame's match within ½ px (0.46
     /// with this). Where the shape grows, its front is new paint and the paper's rule holds.
-    /// The carried paint then dries where it lies: in a thin part's middle the exemplar's
-    /// bloom spreads around it, so it ages into deeper, paler paint (the tone match brings the
-    /// density back, not the blotches' spread; the README's quality section). Not in the
-    /// paper. Off = the time step supplies the motion it stands for. Default: on.
+    /// A carried part keeps the paint it was first given: on a thin part that made plain
+    /// that its middle was painted from the bloom's deep, pale middle, which the border width
+    /// fitted to the part now prevents ([`Params::fit_to_thickness`]). Not in the paper. Off = the time step supplies the motion it stands for. Default: on.
     pub fn full_carry(mut self, on: bool) -> Self {
         self.p.parts.full_carry = on;
         self
