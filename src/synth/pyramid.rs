@@ -125,14 +125,28 @@ fn level(f: &FrameInputs, l: usize, coarse: Option<Nnf>, st: &mut StageTimes, ou
             } else {
                 (vote::vote_with(sl, &field, src.paper, p.schedule.vote_sigma, true), Vec::new())
             };
-            if p.parts.tone_match {
-                tone::match_tone(&mut low, &grain, &field, &gl.mask, &gl.dist, &src.tone, src.paper);
-            }
             if grain.is_empty() {
-                low
-            } else {
-                low.into_iter().zip(grain).map(|(l, g)| vote::with_grain(l, g)).collect()
+                if p.parts.tone_match {
+                    tone::match_tone(&mut low, &field, &gl.mask, &gl.dist, &src.tone, src.paper);
+                }
+                return low;
             }
+            let full: Vec<Rgb> = low.iter().zip(&grain).map(|(&l, &g)| vote::with_grain(l, g)).collect();
+            if !p.parts.tone_match {
+                return full;
+            }
+            // The grain is kept as a density (a factor of the low-pass): where the tone match
+            // darkens the low-pass, its grain darkens in proportion, and a dark pixel's grain
+            // cannot take it below black.
+            let before = low.clone();
+            tone::match_tone(&mut low, &field, &gl.mask, &gl.dist, &src.tone, src.paper);
+            low.iter()
+                .zip(&before)
+                .zip(full)
+                .map(|((l, b), f)| {
+                    std::array::from_fn(|k| if b[k] > 1e-4 { (l[k] * f[k] / b[k]).clamp(0.0, 1.0) } else { f[k] })
+                })
+                .collect()
         });
     }
     field

@@ -11,7 +11,7 @@
 
 use super::params::{HALF, Params};
 use crate::guide::FrameGuides;
-use crate::img::{self, Plane, Rgb};
+use crate::img::{self, Mask, Plane, Rgb};
 use glam::Vec2;
 use rayon::prelude::*;
 
@@ -549,7 +549,14 @@ impl SourcePyramid {
             border_width,
             paper,
             size: frames[0].size(),
-            tone: super::tone::ToneProfile::new(frames, guides, paper),
+            tone: if params.parts.keep_grain {
+                // The output's low-pass is matched, before its grain is added back.
+                let low: Vec<Plane<Rgb>> =
+                    frames.iter().zip(guides).map(|(f, g)| segment_low_pass(f, &g.mask)).collect();
+                super::tone::ToneProfile::new(&low, guides, paper)
+            } else {
+                super::tone::ToneProfile::new(frames, guides, paper)
+            },
         }
     }
 }
@@ -837,6 +844,42 @@ pub(crate) const GRAIN_SIGMA: f32 = 1.5;
 /// Scale of the grain deviation in [`SourceLevel::grain`] lane 3.
 pub(crate) const GRAIN_STD_UNIT: f32 = 1020.0;
 
+/// The Gaussian blur (σ [`GRAIN_SIGMA`]) of `f` within each segment of `mask` — the paint and
+/// the paper apart, so that the edge of the paint is structure, not grain — normalized by the
+/// segment's share of the kernel.
+fn segment_blur<const N: usize>(mask: &Mask, f: &dyn Fn(usize, usize) -> [f32; N]) -> Plane<[f32; N]> {
+    let (w, h) = mask.size();
+    let blurred = [false, true].map(|inside| {
+        let p = Plane::from_fn(w, h, |x, y| {
+            if mask.get(x, y) == inside {
+                let v = f(x, y);
+                std::array::from_fn::<f32, 4, _>(|k| {
+                    if k < N {
+                        v[k]
+                    } else if k == 3 {
+                        1.0
+                    } else {
+                        0.0
+                    }
+                })
+            } else {
+                [0.0; 4]
+            }
+        });
+        img::gaussian_blur(&p, GRAIN_SIGMA)
+    });
+    Plane::from_fn(w, h, |x, y| {
+        let v = blurred[mask.get(x, y) as usize].get(x, y);
+        let n = v[3].max(1e-6);
+        std::array::from_fn(|k| v[k] / n)
+    })
+}
+
+/// The low-pass of a frame that separates its structure from its grain ([`segment_blur`]).
+pub(crate) fn segment_low_pass(c: &Plane<Rgb>, mask: &Mask) -> Plane<Rgb> {
+    segment_blur(mask, &|x, y| c.get(x, y))
+}
+
 /// Builds [`SourceLevel::grain`] of `level` from its frames and masks.
 fn build_grain(level: &mut SourceLevel, rgb: &[Plane<Rgb>], guides: &[FrameGuides]) {
     let (w, h) = (level.w, level.h);
@@ -844,31 +887,14 @@ fn build_grain(level: &mut SourceLevel, rgb: &[Plane<Rgb>], guides: &[FrameGuide
     let frames = grain.par_chunks_mut(level.frame_len).zip(rgb.par_iter().zip(guides));
     // Per frame: the sums of the paint's lagged grain products and their counts, lags 0–3.
     let lagged = frames.map(|(grain, (c, g))| {
-        // Low-pass within each segment: the edge of the paint is structure, not grain.
-        let split = |f: &dyn Fn(usize, usize) -> [f32; 4]| -> [Plane<[f32; 4]>; 2] {
-            [false, true].map(|inside| {
-                let p = Plane::from_fn(w, h, |x, y| if g.mask.get(x, y) == inside { f(x, y) } else { [0.0; 4] });
-                img::gaussian_blur(&p, GRAIN_SIGMA)
-            })
-        };
-        let norm = |b: &[Plane<[f32; 4]>; 2], x: usize, y: usize| {
-            let v = b[g.mask.get(x, y) as usize].get(x, y);
-            let n = v[3].max(1e-6);
-            [v[0] / n, v[1] / n, v[2] / n]
-        };
-        let low = split(&|x, y| {
-            let v = c.get(x, y);
-            [v[0], v[1], v[2], 1.0]
-        });
-        let low = Plane::from_fn(w, h, |x, y| norm(&low, x, y));
-        let var = split(&|x, y| {
+        let low = segment_low_pass(c, &g.mask);
+        let var = segment_blur(&g.mask, &|x, y| {
             let (v, l) = (c.get(x, y), low.get(x, y));
-            let d = (v[0] - l[0]).powi(2) + (v[1] - l[1]).powi(2) + (v[2] - l[2]).powi(2);
-            [d, 0.0, 0.0, 1.0]
+            [(v[0] - l[0]).powi(2) + (v[1] - l[1]).powi(2) + (v[2] - l[2]).powi(2)]
         });
         for (offset, x, y, _) in padded_pixels(w, h) {
             let l = low.get(x, y);
-            let sd = norm(&var, x, y)[0].max(0.0).sqrt();
+            let sd = var.get(x, y)[0].max(0.0).sqrt();
             let q = |v: f32, unit: f32| (v * unit).round().clamp(0.0, 255.0) as u8;
             grain[offset] = [q(l[0], 255.0), q(l[1], 255.0), q(l[2], 255.0), q(sd, GRAIN_STD_UNIT)];
         }
