@@ -521,6 +521,13 @@ impl SourcePyramid {
         };
         let quant = Quant::new(ext_max);
         let v = color_variance(frames, guides);
+        // The exemplar's low-pass (its structure without its grain), made once: the grain map
+        // and the tone profile both read it.
+        let low: Vec<Plane<Rgb>> = if params.parts.keep_grain {
+            frames.par_iter().zip(guides).map(|(f, g)| segment_low_pass(f, &g.mask)).collect()
+        } else {
+            Vec::new()
+        };
         let mut cur_rgb: Vec<Plane<Rgb>> = frames.to_vec();
         let mut cur_g: Vec<FrameGuides> = guides.to_vec();
         let mut out = Vec::with_capacity(levels);
@@ -535,7 +542,7 @@ impl SourcePyramid {
             // Border centers inside the mask only at the finest level (see BORDER_IN_MASK).
             let mut level = build_level(&cur_rgb, &cur_g, &quant, weights, border_width, falloff, l == 0);
             if l == 0 && params.parts.keep_grain {
-                build_grain(&mut level, &cur_rgb, &cur_g);
+                build_grain(&mut level, &cur_rgb, &cur_g, &low);
             }
             out.push(level);
         }
@@ -549,14 +556,8 @@ impl SourcePyramid {
             border_width,
             paper,
             size: frames[0].size(),
-            tone: if params.parts.keep_grain {
-                // The output's low-pass is matched, before its grain is added back.
-                let low: Vec<Plane<Rgb>> =
-                    frames.iter().zip(guides).map(|(f, g)| segment_low_pass(f, &g.mask)).collect();
-                super::tone::ToneProfile::new(&low, guides, paper)
-            } else {
-                super::tone::ToneProfile::new(frames, guides, paper)
-            },
+            // With the grain kept, the output's low-pass is matched, before its grain is added back.
+            tone: super::tone::ToneProfile::new(if params.parts.keep_grain { &low } else { frames }, guides, paper),
         }
     }
 }
@@ -880,14 +881,14 @@ pub(crate) fn segment_low_pass(c: &Plane<Rgb>, mask: &Mask) -> Plane<Rgb> {
     segment_blur(mask, &|x, y| c.get(x, y))
 }
 
-/// Builds [`SourceLevel::grain`] of `level` from its frames and masks.
-fn build_grain(level: &mut SourceLevel, rgb: &[Plane<Rgb>], guides: &[FrameGuides]) {
+/// Builds [`SourceLevel::grain`] of `level` from its frames, their masks and their low-pass
+/// ([`segment_low_pass`]).
+fn build_grain(level: &mut SourceLevel, rgb: &[Plane<Rgb>], guides: &[FrameGuides], low: &[Plane<Rgb>]) {
     let (w, h) = (level.w, level.h);
     let mut grain = vec![[0u8; 4]; level.feat.len()];
-    let frames = grain.par_chunks_mut(level.frame_len).zip(rgb.par_iter().zip(guides));
+    let frames = grain.par_chunks_mut(level.frame_len).zip(rgb.par_iter().zip(guides).zip(low));
     // Per frame: the sums of the paint's lagged grain products and their counts, lags 0–3.
-    let lagged = frames.map(|(grain, (c, g))| {
-        let low = segment_low_pass(c, &g.mask);
+    let lagged = frames.map(|(grain, ((c, g), low))| {
         let var = segment_blur(&g.mask, &|x, y| {
             let (v, l) = (c.get(x, y), low.get(x, y));
             [(v[0] - l[0]).powi(2) + (v[1] - l[1]).powi(2) + (v[2] - l[2]).powi(2)]

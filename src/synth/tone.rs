@@ -143,14 +143,9 @@ impl QuantileMap {
         let mut gap = vec![(0u16, 0u16); LEVELS];
         let mut j = 0;
         while j < LEVELS {
-            if have[j] > 0.0 {
-                gap[j] = (j as u16, j as u16 + 1);
-                j += 1;
-                continue;
-            }
             let end = (j..LEVELS).find(|&e| have[e] > 0.0).unwrap_or(LEVELS);
             gap[j..end].fill((j as u16, end as u16));
-            j = end;
+            j = end + 1;
         }
         Some(QuantileMap { have: cum(have)?, want: cum(want)?, gap })
     }
