@@ -1,6 +1,6 @@
 //! Separable Gaussian blur with clamped edges.
 
-use super::{Blend, Plane};
+use super::{Blend, Mask, Plane};
 use rayon::prelude::*;
 
 /// A normalized 1D Gaussian kernel of standard deviation `sigma`, radius `⌈3σ⌉`.
@@ -50,6 +50,59 @@ pub fn gaussian_blur<T: Blend>(src: &Plane<T>, sigma: f32) -> Plane<T> {
         }
     });
     dst
+}
+
+/// The Gaussian blur (σ `sigma`) of `f` over the pixels where `mask` equals `side`, normalized
+/// by their share of the kernel, so that nothing from the other side of the mask's edge is
+/// mixed in (up to three lanes). Only that side's bounding box and the kernel's reach around it
+/// are blurred; the result is zero on the other side.
+pub fn blur_within<const N: usize>(
+    mask: &Mask,
+    side: bool,
+    sigma: f32,
+    f: &dyn Fn(usize, usize) -> [f32; N],
+) -> Plane<[f32; N]> {
+    const { assert!(N <= 3) };
+    let (w, h) = mask.size();
+    let mut out = Plane::filled(w, h, [0.0f32; N]);
+    let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0, 0);
+    for y in 0..h {
+        for x in (0..w).filter(|&x| mask.get(x, y) == side) {
+            (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x + 1), y1.max(y + 1));
+        }
+    }
+    if x0 >= x1 {
+        return out;
+    }
+    let reach = gaussian_kernel(sigma).len() / 2;
+    let (x0, y0) = (x0.saturating_sub(reach), y0.saturating_sub(reach));
+    let (x1, y1) = ((x1 + reach).min(w), (y1 + reach).min(h));
+    let lanes = Plane::from_fn(x1 - x0, y1 - y0, |x, y| {
+        let (x, y) = (x + x0, y + y0);
+        if mask.get(x, y) == side {
+            let v = f(x, y);
+            std::array::from_fn::<f32, 4, _>(|k| {
+                if k < N {
+                    v[k]
+                } else if k == 3 {
+                    1.0
+                } else {
+                    0.0
+                }
+            })
+        } else {
+            [0.0; 4]
+        }
+    });
+    let blurred = gaussian_blur(&lanes, sigma);
+    for y in y0..y1 {
+        for x in (x0..x1).filter(|&x| mask.get(x, y) == side) {
+            let v = blurred.get(x - x0, y - y0);
+            let n = v[3].max(1e-6);
+            out.set(x, y, std::array::from_fn(|k| v[k] / n));
+        }
+    }
+    out
 }
 
 #[cfg(test)]

@@ -9,7 +9,7 @@ mod blur;
 mod io;
 mod resample;
 
-pub use blur::{gaussian_blur, gaussian_kernel};
+pub use blur::{blur_within, gaussian_blur, gaussian_kernel};
 pub use io::{
     MAX_IMAGE_SIDE, atomic_write, decode, load_gray, load_rgb, load_rgba, save_gray, save_mask, save_rgb, save_rgba,
     write_png_rgba8,

@@ -849,31 +849,9 @@ pub(crate) const GRAIN_STD_UNIT: f32 = 1020.0;
 /// the paper apart, so that the edge of the paint is structure, not grain — normalized by the
 /// segment's share of the kernel.
 fn segment_blur<const N: usize>(mask: &Mask, f: &dyn Fn(usize, usize) -> [f32; N]) -> Plane<[f32; N]> {
+    let [paper, paint] = [false, true].map(|side| img::blur_within(mask, side, GRAIN_SIGMA, f));
     let (w, h) = mask.size();
-    let blurred = [false, true].map(|inside| {
-        let p = Plane::from_fn(w, h, |x, y| {
-            if mask.get(x, y) == inside {
-                let v = f(x, y);
-                std::array::from_fn::<f32, 4, _>(|k| {
-                    if k < N {
-                        v[k]
-                    } else if k == 3 {
-                        1.0
-                    } else {
-                        0.0
-                    }
-                })
-            } else {
-                [0.0; 4]
-            }
-        });
-        img::gaussian_blur(&p, GRAIN_SIGMA)
-    });
-    Plane::from_fn(w, h, |x, y| {
-        let v = blurred[mask.get(x, y) as usize].get(x, y);
-        let n = v[3].max(1e-6);
-        std::array::from_fn(|k| v[k] / n)
-    })
+    Plane::from_fn(w, h, |x, y| if mask.get(x, y) { paint.get(x, y) } else { paper.get(x, y) })
 }
 
 /// The low-pass of a frame that separates its structure from its grain ([`segment_blur`]).

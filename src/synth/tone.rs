@@ -150,39 +150,9 @@ fn coarse_band(c: &[Rgb], w: usize, mask: &Mask, paper: Rgb, sigma: f32) -> Opti
     if sigma <= 0.0 {
         return None;
     }
-    // Only the mask's bounding box and the kernel's reach around it: the rest is zero.
-    let h = c.len() / w;
-    let reach = crate::img::gaussian_kernel(sigma).len() / 2;
-    let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0, 0);
-    for y in 0..h {
-        for x in (0..w).filter(|&x| mask.get(x, y)) {
-            (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x + 1), y1.max(y + 1));
-        }
-    }
-    let mut coarse = vec![[0.0f32; 3]; c.len()];
-    if x0 >= x1 {
-        return Some(coarse);
-    }
-    let (x0, y0) = (x0.saturating_sub(reach), y0.saturating_sub(reach));
-    let (x1, y1) = ((x1 + reach).min(w), (y1 + reach).min(h));
-    let lanes = Plane::from_fn(x1 - x0, y1 - y0, |x, y| {
-        let (x, y) = (x + x0, y + y0);
-        if mask.get(x, y) {
-            let v = density(c[y * w + x], paper);
-            [v[0], v[1], v[2], 1.0]
-        } else {
-            [0.0; 4]
-        }
-    });
-    let blurred = crate::img::gaussian_blur(&lanes, sigma);
-    drop(lanes);
-    for y in y0..y1 {
-        for x in (x0..x1).filter(|&x| mask.get(x, y)) {
-            let v = blurred.get(x - x0, y - y0);
-            coarse[y * w + x] = std::array::from_fn(|k| (v[k] / v[3].max(1e-6)).max(0.0));
-        }
-    }
-    Some(coarse)
+    debug_assert_eq!(mask.size(), (w, c.len() / w));
+    let blurred = crate::img::blur_within(mask, true, sigma, &|x, y| density(c[y * w + x], paper));
+    Some(blurred.data().iter().map(|v| v.map(|d| d.max(0.0))).collect())
 }
 
 /// The density of pixel `q` (color `c`) split into its coarse band ([`coarse_band`]) and its
