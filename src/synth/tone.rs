@@ -107,7 +107,7 @@ impl PassProfile {
                 for (q, (&m, &d)) in g.mask.data().iter().zip(g.dist.data()).enumerate() {
                     if m {
                         let b = bin(d);
-                        let (cq, dq) = bands_at(f.data()[q], paper, coarse.as_deref(), q);
+                        let (cq, dq) = bands_at(density(f.data()[q], paper), coarse.as_deref(), q);
                         for k in 0..3 {
                             h[b][k][level(cq[k]) as usize] += 1;
                             sq[b][k] += (dq[k] as f64).powi(2);
@@ -155,11 +155,10 @@ fn coarse_band(c: &[Rgb], w: usize, mask: &Mask, paper: Rgb, sigma: f32) -> Opti
     Some(blurred.data().iter().map(|v| v.map(|d| d.max(0.0))).collect())
 }
 
-/// The density of pixel `q` (color `c`) split into its coarse band ([`coarse_band`]) and its
-/// detail, the rest.
+/// The density `d` of pixel `q` split into its coarse band ([`coarse_band`]) and its detail,
+/// the rest.
 #[inline]
-fn bands_at(c: Rgb, paper: Rgb, coarse: Option<&[[f32; 3]]>, q: usize) -> ([f32; 3], [f32; 3]) {
-    let d = density(c, paper);
+fn bands_at(d: [f32; 3], coarse: Option<&[[f32; 3]]>, q: usize) -> ([f32; 3], [f32; 3]) {
     match coarse {
         None => (d, [0.0; 3]),
         Some(cb) => (cb[q], std::array::from_fn(|k| d[k] - cb[q][k])),
@@ -363,7 +362,7 @@ fn match_pass(rgb: &mut [Rgb], field: &Nnf, mask: &Mask, dist: &Plane<f32>, prof
             continue;
         }
         let b = bin(dist.get(x, y));
-        let (cq, dq) = bands_at(rgb[q], paper, coarse.as_deref(), q);
+        let (cq, dq) = bands_at(density(rgb[q], paper), coarse.as_deref(), q);
         for k in 0..3 {
             have[b][k][level(cq[k]) as usize] += 1.0;
             have_sq[b][k] += (dq[k] as f64).powi(2);
@@ -419,7 +418,7 @@ fn match_pass(rgb: &mut [Rgb], field: &Nnf, mask: &Mask, dist: &Plane<f32>, prof
             let (b0, f) = (t as usize, t.fract());
             let b1 = (b0 + 1).min(DEPTHS - 1);
             let d = density(*c, paper);
-            let (cq, dq) = bands_at(*c, paper, coarse.as_deref(), y * w + x);
+            let (cq, dq) = bands_at(d, coarse.as_deref(), y * w + x);
             *c = std::array::from_fn(|k| {
                 if d[k] <= 0.0 {
                     return c[k];
@@ -619,7 +618,7 @@ mod tests {
         let coarse = coarse_band(rgb, mask.width(), mask, [1.0; 3], BAND_SIGMA);
         let v: Vec<f32> = (0..rgb.len())
             .filter(|&q| mask.get(q % mask.width(), q / mask.width()))
-            .map(|q| bands_at(rgb[q], [1.0; 3], coarse.as_deref(), q).1[k])
+            .map(|q| bands_at(density(rgb[q], [1.0; 3]), coarse.as_deref(), q).1[k])
             .collect();
         (v.iter().map(|d| d * d).sum::<f32>() / v.len() as f32).sqrt()
     }
