@@ -100,14 +100,15 @@ impl PassProfile {
             .par_iter()
             .zip(guides)
             .map(|(f, g)| {
-                let coarse = coarse_band(f.data(), f.width(), &g.mask, paper, sigma);
+                let dens = densities(f.data(), f.width(), &g.mask, paper);
+                let coarse = coarse_band(&dens, f.width(), &g.mask, sigma);
                 let mut h = vec![[[0u32; LEVELS]; 3]; DEPTHS];
                 let mut sq = vec![[0.0f64; 3]; DEPTHS];
                 let mut n = [0u32; DEPTHS];
                 for (q, (&m, &d)) in g.mask.data().iter().zip(g.dist.data()).enumerate() {
                     if m {
                         let b = bin(d);
-                        let (cq, dq) = bands_at(density(f.data()[q], paper), coarse.as_deref(), q);
+                        let (cq, dq) = bands_at(dens[q], coarse.as_deref(), q);
                         for k in 0..3 {
                             h[b][k][level(cq[k]) as usize] += 1;
                             sq[b][k] += (dq[k] as f64).powi(2);
@@ -143,15 +144,22 @@ impl PassProfile {
     }
 }
 
-/// The coarse band of the densities of the pixels `c` (rows of `w`) inside `mask`: their
+/// The densities of the pixels `c` (rows of `w`) inside `mask`, over the paper color `paper`
+/// (zero outside `mask`): computed once per pass, for the coarse band, the histograms and the
+/// map.
+fn densities(c: &[Rgb], w: usize, mask: &Mask, paper: Rgb) -> Vec<[f32; 3]> {
+    debug_assert_eq!(mask.size(), (w, c.len() / w));
+    c.par_iter().enumerate().map(|(q, &c)| if mask.get(q % w, q / w) { density(c, paper) } else { [0.0; 3] }).collect()
+}
+
+/// The coarse band of the densities `dens` (rows of `w`, [`densities`]) inside `mask`: their
 /// Gaussian blur of σ `sigma` within `mask`, normalized by the mask's share of the kernel (zero
 /// outside `mask`). `None` for `sigma = 0`: the whole density is the coarse band.
-fn coarse_band(c: &[Rgb], w: usize, mask: &Mask, paper: Rgb, sigma: f32) -> Option<Vec<[f32; 3]>> {
+fn coarse_band(dens: &[[f32; 3]], w: usize, mask: &Mask, sigma: f32) -> Option<Vec<[f32; 3]>> {
     if sigma <= 0.0 {
         return None;
     }
-    debug_assert_eq!(mask.size(), (w, c.len() / w));
-    let blurred = crate::img::blur_within(mask, true, sigma, &|x, y| density(c[y * w + x], paper));
+    let blurred = crate::img::blur_within(mask, true, sigma, &|x, y| dens[y * w + x]);
     Some(blurred.data().iter().map(|v| v.map(|d| d.max(0.0))).collect())
 }
 
@@ -349,7 +357,8 @@ type BinMap = ([Vec<f32>; 3], [f32; 3]);
 /// One pass of [`match_tone`].
 fn match_pass(rgb: &mut [Rgb], field: &Nnf, mask: &Mask, dist: &Plane<f32>, prof: &PassProfile, paper: Rgb) {
     let frames = prof.frames();
-    let coarse = coarse_band(rgb, field.w, mask, paper, prof.sigma);
+    let dens = densities(rgb, field.w, mask, paper);
+    let coarse = coarse_band(&dens, field.w, mask, prof.sigma);
     // The output's coarse histograms and detail power per depth bin, and its matches per bin
     // and frame.
     let mut have = vec![[[0.0f64; LEVELS]; 3]; DEPTHS];
@@ -362,7 +371,7 @@ fn match_pass(rgb: &mut [Rgb], field: &Nnf, mask: &Mask, dist: &Plane<f32>, prof
             continue;
         }
         let b = bin(dist.get(x, y));
-        let (cq, dq) = bands_at(density(rgb[q], paper), coarse.as_deref(), q);
+        let (cq, dq) = bands_at(dens[q], coarse.as_deref(), q);
         for k in 0..3 {
             have[b][k][level(cq[k]) as usize] += 1.0;
             have_sq[b][k] += (dq[k] as f64).powi(2);
@@ -384,10 +393,10 @@ fn match_pass(rgb: &mut [Rgb], field: &Nnf, mask: &Mask, dist: &Plane<f32>, prof
                     (w > 0).then(|| (w as f64, &prof.hist[i][j], &prof.detail[i][j]))
                 })
                 .collect();
-            let total: f64 = used.iter().map(|u| u.0).sum();
             if used.is_empty() {
                 return None;
             }
+            let total: f64 = used.iter().map(|u| u.0).sum();
             let mut want = [[0.0f64; LEVELS]; 3];
             for (k, wk) in want.iter_mut().enumerate() {
                 if let [(_, h, _)] = used[..] {
@@ -417,7 +426,7 @@ fn match_pass(rgb: &mut [Rgb], field: &Nnf, mask: &Mask, dist: &Plane<f32>, prof
             let t = (dist.get(x, y).max(0.0) - 0.5).clamp(0.0, (DEPTHS - 1) as f32);
             let (b0, f) = (t as usize, t.fract());
             let b1 = (b0 + 1).min(DEPTHS - 1);
-            let d = density(*c, paper);
+            let d = dens[y * w + x];
             let (cq, dq) = bands_at(d, coarse.as_deref(), y * w + x);
             *c = std::array::from_fn(|k| {
                 if d[k] <= 0.0 {
@@ -615,10 +624,11 @@ mod tests {
 
     /// Root mean square of the detail band (split at [`BAND_SIGMA`]) of channel `k` over `mask`.
     fn detail_rms(rgb: &[Rgb], mask: &Mask, k: usize) -> f32 {
-        let coarse = coarse_band(rgb, mask.width(), mask, [1.0; 3], BAND_SIGMA);
+        let dens = densities(rgb, mask.width(), mask, [1.0; 3]);
+        let coarse = coarse_band(&dens, mask.width(), mask, BAND_SIGMA);
         let v: Vec<f32> = (0..rgb.len())
             .filter(|&q| mask.get(q % mask.width(), q / mask.width()))
-            .map(|q| bands_at(density(rgb[q], [1.0; 3]), coarse.as_deref(), q).1[k])
+            .map(|q| bands_at(dens[q], coarse.as_deref(), q).1[k])
             .collect();
         (v.iter().map(|d| d * d).sum::<f32>() / v.len() as f32).sqrt()
     }
