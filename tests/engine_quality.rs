@@ -294,21 +294,31 @@ fn boundary_term_keeps_the_sliding_paint_textured() {
     // Since a moving shape's paint is carried with all of its motion
     // (`ParamsBuilder::full_carry`, fifth session of 2026-12-06): rims 0.094 and 0.074 with the
     // term, 0.088 and 0.057 without (+0.017); sliding contrast 0.995 with, 0.873 without
-    // (+0.122), with the tone match 1.021 and 0.999 (+0.022).
+    // (+0.122), with the tone match 1.021 and 0.999 (+0.022). Since the flow's temporal
+    // windows read only real frames (the replicated ends of the sequence had under-reported the
+    // motion of its first and last frames; 2026-12-07; both measured with the guide cache off):
+    // rims 0.091 and 0.066 with the term, 0.083 and 0.043 without (+0.023; before 0.094 and
+    // 0.074, 0.088 and 0.057); sliding contrast 0.937 with, 0.878 without (+0.059; before 0.995
+    // and 0.873), with the tone match 1.080 and 1.059 (+0.021; before 1.086 and 0.995), the
+    // sliding rim with the tone match 0.087 and 0.085 (before 0.085 and 0.086). The flow now
+    // carries more of the sliding paint's texture by itself; the term still adds some, and more
+    // of its rim. The contrast floor without the tone match is now +0.04; the others stay.
     let (_, g, l) = row("no tone match");
     let (_, g0, l0) = row("no boundary term, no tone match");
     let (_, _, full) = row("full method");
     let (_, _, full0) = row("no boundary term (w_df = 0)");
     let what = format!(
-        "rim with {:?} without {:?}; sliding contrast with {} / {} without {} / {}",
+        "rim with {:?} without {:?} (tone match: sliding {} / {}); sliding contrast with {} / {} without {} / {}",
         (g.rim, l.rim),
         (g0.rim, l0.rim),
+        full.rim,
+        full0.rim,
         l.contrast,
         full.contrast,
         l0.contrast,
         full0.contrast
     );
-    assert!(l.contrast > l0.contrast + 0.1 && full.contrast > full0.contrast + 0.01, "{what}");
+    assert!(l.contrast > l0.contrast + 0.04 && full.contrast > full0.contrast + 0.01, "{what}");
     assert!(l.rim > l0.rim - 0.003 && full.rim > full0.rim - 0.003 && g.rim >= g0.rim - 0.005, "{what}");
 }
 
@@ -514,8 +524,11 @@ fn flow_alignment(samples: &[FieldSample]) -> f32 {
 }
 
 /// Measured on the sliding ellipse's last frame: 0.0000 of the matches in the other segment
-/// with segments, 0.0445 without. Floors: at most 0.01 with, and 0.015 more without. With the
-/// finest merge's uniformity (2026-12-05): 0.0000 and 0.0421.
+/// with segments, 0.0445 without. With the finest merge's uniformity (2026-12-05): 0.0000 and
+/// 0.0421. Measured again with the guide cache off (2026-12-07): 0.0000 and 0.0209 on the
+/// engine before, 0.0000 and 0.0110 since the flow's temporal windows read only real frames (the
+/// last frame is where the flow changed most: before, it under-reported the motion there).
+/// Floors: at most 0.01 with, and 0.005 more without.
 #[test]
 fn segments_keep_border_paint_at_the_border() {
     let masks = sliding();
@@ -524,7 +537,7 @@ fn segments_keep_border_paint_at_the_border() {
     let (m, m0) = (segment_mixing(&with, b), segment_mixing(&without, b));
     println!("matches in the other segment: {m:.4} with segments, {m0:.4} without");
     assert!(m <= 0.01, "with segments {m} of the matches cross");
-    assert!(m0 >= m + 0.015, "without segments: {m0} against {m}");
+    assert!(m0 >= m + 0.005, "without segments: {m0} against {m}");
 }
 
 /// Measured on the sliding ellipse's last frame: mean |cos| 0.878 with the rule, 0.647 without (a

@@ -147,14 +147,16 @@ fn forward_then_backward_motion_returns_ext_pos_to_zero() {
     ends.sort_by(f32::total_cmp);
     let median = ends[ends.len() / 2];
     eprintln!("  median at the end {median:.3} px (accumulating norms instead would give ≥ {:.1} px)", 2.0 * peak);
-    // Measured: at the end 0.290 px at most, median 0.221 px, of a peak of 18.94 px. With the
-    // forward difference they were 1.382 and 0.525 px: its second-order shortfall at the rim
-    // (|u_t|²/2r per frame) has the same sign both ways. What is left is the sequence's ends,
-    // where the speed is a one-sided difference. Bounds 0.03 and 0.02 of the peak (0.57 and
-    // 0.38 px).
+    // Measured: at the end 0.692 px at most, median 0.015 px, of a peak of 20.34 px (the disc
+    // moves 24 px to the turn). With the forward difference they were 1.382 and 0.525 px: its
+    // second-order shortfall at the rim (|u_t|²/2r per frame) has the same sign both ways. With
+    // the replicated ends of the sequence averaged into the first and last frames' windows,
+    // 0.290 and 0.221 px of a peak of 18.94 px: the first frames' motion was under-reported.
+    // What is left at the rim is the ends, where the speed is a one-sided difference. Bounds
+    // 0.04 and 0.02 of the peak (0.81 and 0.41 px), the peak over 19 px.
     assert!(count > 100);
-    assert!(peak > 15.0, "{peak}");
-    assert!(end < 0.03 * peak, "{end} vs {peak}");
+    assert!(peak > 19.0, "{peak}");
+    assert!(end < 0.04 * peak, "{end} vs {peak}");
     assert!(median < 0.02 * peak, "{median} vs {peak}");
 }
 
@@ -245,13 +247,14 @@ fn a_thin_fast_bar_keeps_its_speed() {
 }
 
 /// Mean flow error (pixels) inside the mask of the quality suite's generated `kind` against its
-/// known motion, over frames 3 .. n − 4 (the ends see replicated frames), and the mean speed.
-fn flow_error(kind: fluidymation::quality::TargetKind, frames: usize) -> (f32, f32) {
+/// known motion, over the flows `k` (the motion k → k + 1) that `which(k)` picks, and the mean
+/// speed.
+fn flow_error(kind: fluidymation::quality::TargetKind, frames: usize, which: impl Fn(usize) -> bool) -> (f32, f32) {
     let t = fluidymation::quality::Target::new(kind, 512, frames);
     let cov: Vec<Plane<f32>> = (0..frames).map(|k| t.coverage(k)).collect();
     let g = compute_sequence(&cov, &GuideParams::default()).unwrap();
     let (mut err, mut speed, mut n) = (0f64, 0f64, 0f64);
-    for (k, f) in g.iter().enumerate().take(frames - 4).skip(3) {
+    for (k, f) in g.iter().enumerate().take(frames - 1).filter(|&(k, _)| which(k)) {
         let (w, h) = f.mask.size();
         for y in 0..h {
             for x in 0..w {
@@ -285,9 +288,32 @@ fn flow_follows_the_whole_motion_of_turning_and_moving_shapes() {
         (TargetKind::Rotating, 0.6),
         (TargetKind::Limb, 0.31),
     ] {
-        let (err, speed) = flow_error(kind, 24);
+        let (err, speed) = flow_error(kind, 24, |k| (3..20).contains(&k));
         eprintln!("{kind:?}: mean flow error {err:.3} px of {speed:.2} px/frame");
         assert!(err < bound, "{kind:?}: mean flow error {err:.3} px (bound {bound})");
+    }
+}
+
+/// The flows of the first three and the last three frames, which the temporal windows reach
+/// past the ends of the sequence: the windows read only real frames, never the replicated ends
+/// (in which nothing moves), and the last frame's velocity is measured backwards. Measured
+/// (24 frames, 512², mean error per pixel over flows 0–2 and 20–22): translating 0.188 px of
+/// 3.10 px/frame, growing 0.114 of 2.44, shrinking 0.088 of 2.09, turning ellipse 0.517 of
+/// 3.99, limb 0.854 of 5.46; with the replicated ends averaged in, 0.824, 0.652, 0.523, 1.260,
+/// 1.117. Bounds: the measured value plus about 25 %.
+#[test]
+fn flow_keeps_its_speed_at_the_ends_of_the_sequence() {
+    use fluidymation::quality::TargetKind;
+    for (kind, bound) in [
+        (TargetKind::Translating, 0.24),
+        (TargetKind::Growing, 0.145),
+        (TargetKind::Shrinking, 0.11),
+        (TargetKind::Rotating, 0.65),
+        (TargetKind::Limb, 1.07),
+    ] {
+        let (err, speed) = flow_error(kind, 24, |k| !(3..20).contains(&k));
+        eprintln!("{kind:?}: mean flow error at the ends {err:.3} px of {speed:.2} px/frame");
+        assert!(err < bound, "{kind:?}: mean flow error at the ends {err:.3} px (bound {bound})");
     }
 }
 

@@ -5,8 +5,9 @@
 //! `acc+(i) = acc+(i−1) + flow(i−1)` sums the motion `0 → i` that brought the material to frame
 //! `i`, and `acc−(i) = acc−(i+1) + flow(i)` sums the motion `i → last` still to come. (Appendix A
 //! writes the estimate at frame `i` from `dist_i − dist_{i−1}`, the motion `i−1 → i`; used in those
-//! recurrences it would lag one frame behind.) The last frame's flow uses the replicated last
-//! frame (see the temporal smoothing below), so it fades rather than stopping dead. The raw
+//! recurrences it would lag one frame behind.) The last frame's flow carries on the motion that
+//! brought it (its velocity is measured backwards, step 2): nothing follows it, but what arrived
+//! at it moved. The raw
 //! field `F_i` of step 2–4 is a velocity *at* frame `i` (a central difference); the flow of
 //! frame `i` is the mean of the velocities at `i` and `i + 1` (step 5), the trapezoid rule for
 //! the motion between them.
@@ -17,7 +18,13 @@
 //!    Gaussian of σ_t = `time_blur_sigma` frames (radius ⌈3σ_t⌉). Frames beyond the sequence, or
 //!    beyond a run of frames whose masks are non-degenerate, are replaced by the nearest frame of
 //!    the run (edges replicated): an empty or full mask has no meaningful distance field, so a
-//!    layer that appears or vanishes does not get a burst of fake motion.
+//!    layer that appears or vanishes does not get a burst of fake motion. **The averages and
+//!    differences below read only real frames of the run** (an addition): a replicated end is a
+//!    frame in which nothing moved, and averaging it in under-reported the motion of the first
+//!    and last frames of every moving shape — the first three and last three flows of the quality
+//!    suite's 24-frame targets (512²) had a mean error of 0.82 px (translating, 3.1 px a frame),
+//!    0.65 (growing), 0.52 (shrinking), 1.26 (turning ellipse), 1.12 (limb); with real frames
+//!    only, 0.19, 0.11, 0.09, 0.52, 0.85 (the middle frames 0.06, 0.03, 0.03, 0.45, 0.26).
 //!
 //!    **Per boundary pixel, the window is cut to the frames that fit** (an addition). The
 //!    average and the difference below assume that the edge a boundary pixel `b` lies on moves
@@ -55,7 +62,8 @@
 //!    0.865 of its speed with the forward difference, 0.870 with the central one, 0.907 with
 //!    the angle test too; the rest is of third order and beyond). Where frame
 //!    `i − 1` does not fit, or is a replicated end of the run, the forward difference stands in
-//!    for it. The boundary flow is `s · n`. This is Appendix A's
+//!    for it; at the last frame of the run, where frame `i + 1` is the replicated end, the
+//!    backward difference `dist_i − dist_{i−1}`. The boundary flow is `s · n`. This is Appendix A's
 //!    `(dist_i − dist_{i−1}) ∇dist_i / |∇dist_i|` with one sign flipped: for a distance that is
 //!    *positive inside*, a growing mask has a rising distance and a gradient pointing inwards, so
 //!    the paper's expression as printed points inwards; `−∇` is the outward direction.
@@ -219,7 +227,11 @@ enum Estimate {
     Central(usize),
     /// `D̃_{j+1} − D̃_j`, each averaged over `k = −r ..= r` around its frame.
     Forward(usize),
-    /// Frame `j + 1` does not fit: the part's fitted motion stands in.
+    /// `dist_j − dist_{j−1}`: frame `j` is the last of its run, and its velocity is the motion
+    /// that brought it.
+    Backward,
+    /// The frame the difference needs (`j + 1`, or `j − 1` at the last frame) does not fit:
+    /// the part's fitted motion stands in.
     Unmeasured,
 }
 
@@ -270,14 +282,17 @@ impl Task {
     /// under-reports the motion — on a 14-px limb swinging at up to 11 px a frame the flow had
     /// 32–64 % of the true motion.
     ///
-    /// The central difference needs frames `j ± 1` to fit and to be real frames (not the
-    /// replicated ends of the run); its window widens to `k = −1−r ..= 1+r` while the frames
-    /// added fit and their nearest edge still lies along the pixel's normal (within 45°,
-    /// [`MIN_ALONG`]): a small curved part that has moved past its own radius is nearest to the
-    /// pixel at its side, and its distance there grows with the distance travelled in any
-    /// direction. Without the central difference the forward one over `k = −r ..= r + 1`, the
-    /// window cut before the first frame that does not fit on either side; when that is frame
-    /// `j + 1` itself the speed is not measured.
+    /// Every window holds real frames only, never the replicated ends of the run (module
+    /// docs, step 1). The central difference needs frames `j ± 1` to fit; its window widens to
+    /// `k = −1−r ..= 1+r` while the frames added are real, fit and their nearest edge still lies
+    /// along the pixel's normal (within 45°, [`MIN_ALONG`]): a small curved part that has moved
+    /// past its own radius is nearest to the pixel at its side, and its distance there grows
+    /// with the distance travelled in any direction. Without the central difference the forward
+    /// one over `k = −r ..= r + 1`, the window cut before the first frame that is not real or
+    /// does not fit on either side; when that is frame `j + 1` itself the speed is not measured.
+    /// At the ends of the run the window is the two frames there: at the first frame the
+    /// forward difference, at the last the backward one ([`Estimate::Backward`]), each where
+    /// the other frame fits and lies along the normal (else not measured).
     fn estimate_at(&self, nb: &[u32; 5], rt: usize) -> Estimate {
         let at = |k: isize| {
             let here = self.raw(k, rt, nb[0] as usize);
@@ -292,16 +307,28 @@ impl Task {
             let (d, g) = at(k);
             d <= 1.0 || g.dot(outward) <= 0.5 * g.length()
         };
+        let along = |k: isize| {
+            let (d, g) = at(k);
+            d.abs() <= 1.0 || -g.dot(outward) >= MIN_ALONG * g.length()
+        };
+        // Frame j + k is real unless it is a replicated end: the same slot as its neighbour
+        // nearer to j.
+        let real = |k: isize| {
+            let slot = |k: isize| self.kslots[(rt as isize + k) as usize];
+            k == 0 || slot(k) != slot(k - k.signum())
+        };
+        if rt > 0 && !real(1) {
+            let before = real(-1) && fits(-1) && along(-1);
+            return if before { Estimate::Backward } else { Estimate::Unmeasured };
+        }
+        if rt > 0 && !real(-1) {
+            return if fits(1) && along(1) { Estimate::Forward(0) } else { Estimate::Unmeasured };
+        }
         if !fits(1) {
             return Estimate::Unmeasured;
         }
-        let real = |k: isize| self.kslots[(rt as isize + k) as usize] != self.kslots[rt];
-        if rt > 0 && real(-1) && real(1) && fits(-1) {
-            let along = |k: isize| {
-                let (d, g) = at(k);
-                d.abs() <= 1.0 || -g.dot(outward) >= MIN_ALONG * g.length()
-            };
-            let widens = |k: isize| fits(k) && along(k);
+        if rt > 0 && fits(-1) {
+            let widens = |k: isize| real(k) && fits(k) && along(k);
             let mut r = 0;
             while r + 1 < rt && widens(-(r as isize) - 2) && widens(r as isize + 2) {
                 r += 1;
@@ -309,7 +336,8 @@ impl Task {
             return Estimate::Central(r);
         }
         let mut r = 0;
-        while r < rt && fits(-(r as isize) - 1) && fits(r as isize + 2) {
+        let fits_real = |k: isize| real(k) && fits(k);
+        while r < rt && fits_real(-(r as isize) - 1) && fits_real(r as isize + 2) {
             r += 1;
         }
         Estimate::Forward(r)
@@ -336,6 +364,7 @@ impl Task {
         let (r, before, after, steps, measured) = match self.estimate_at(nb, cfg.rt) {
             Estimate::Central(r) => (r, -1, 1, 2.0, true),
             Estimate::Forward(r) => (r, 0, 1, 1.0, true),
+            Estimate::Backward => (0, -1, 0, 1.0, true),
             Estimate::Unmeasured => (0, 0, 1, 1.0, false),
         };
         let field = |s: isize| {
@@ -347,7 +376,7 @@ impl Task {
         let len = here.1.length();
         let n = if len > 1e-6 { -here.1 / len } else { Vec2::ZERO };
         let (d0, g0) = if before == 0 { here } else { field(before) };
-        let (d1, g1) = field(after);
+        let (d1, g1) = if after == 0 { here } else { field(after) };
         // A field that moves by v changes by |∇D̃|·(n·v): a temporal average of distance fields
         // whose normals disagree has |∇D̃| < 1, so its change is divided by it.
         let slope = (0.5 * (g0.length() + g1.length())).clamp(MIN_SLOPE, 1.0);

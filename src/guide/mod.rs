@@ -160,10 +160,11 @@ impl GuideParams {
     /// cached by an earlier release would be read beside a target's computed by this one
     /// (measured with a changed flow estimate: the identity's worst frame fell from 33.5–100 dB
     /// to 23–37 dB until the version changed). v4: the flow's speeds divided by the smoothed
-    /// field's slope, its unobserved modes fitted rigid.
+    /// field's slope, its unobserved modes fitted rigid. v6: the flow's temporal windows read
+    /// only real frames, the last frame's velocity measured backwards.
     pub fn fingerprint(&self) -> String {
         format!(
-            "guides-v5 blur={} thr={} tblur={} frad={} tan={} tol={}",
+            "guides-v6 blur={} thr={} tblur={} frad={} tan={} tol={}",
             self.blur_sigma,
             self.mask_threshold,
             self.time_blur_sigma,
