@@ -282,15 +282,25 @@ fn flow_error(kind: fluidymation::quality::TargetKind, frames: usize, which: imp
 #[test]
 fn flow_follows_the_whole_motion_of_turning_and_moving_shapes() {
     use fluidymation::quality::TargetKind;
-    for (kind, bound) in [
+    let bounds = [
         (TargetKind::Translating, 0.12),
         (TargetKind::Growing, 0.065),
         (TargetKind::Rotating, 0.6),
         (TargetKind::Limb, 0.31),
-    ] {
-        let (err, speed) = flow_error(kind, 24, |k| (3..20).contains(&k));
-        eprintln!("{kind:?}: mean flow error {err:.3} px of {speed:.2} px/frame");
-        assert!(err < bound, "{kind:?}: mean flow error {err:.3} px (bound {bound})");
+    ];
+    check_flow_errors(&bounds, "", |k| (3..20).contains(&k));
+}
+
+/// Asserts [`flow_error`] over the flows `which` picks under each target's bound (24 frames).
+fn check_flow_errors(
+    bounds: &[(fluidymation::quality::TargetKind, f32)],
+    what: &str,
+    which: impl Fn(usize) -> bool + Copy,
+) {
+    for &(kind, bound) in bounds {
+        let (err, speed) = flow_error(kind, 24, which);
+        eprintln!("{kind:?}: mean flow error{what} {err:.3} px of {speed:.2} px/frame");
+        assert!(err < bound, "{kind:?}: mean flow error{what} {err:.3} px (bound {bound})");
     }
 }
 
@@ -304,17 +314,14 @@ fn flow_follows_the_whole_motion_of_turning_and_moving_shapes() {
 #[test]
 fn flow_keeps_its_speed_at_the_ends_of_the_sequence() {
     use fluidymation::quality::TargetKind;
-    for (kind, bound) in [
+    let bounds = [
         (TargetKind::Translating, 0.24),
         (TargetKind::Growing, 0.145),
         (TargetKind::Shrinking, 0.11),
         (TargetKind::Rotating, 0.65),
         (TargetKind::Limb, 1.07),
-    ] {
-        let (err, speed) = flow_error(kind, 24, |k| !(3..20).contains(&k));
-        eprintln!("{kind:?}: mean flow error at the ends {err:.3} px of {speed:.2} px/frame");
-        assert!(err < bound, "{kind:?}: mean flow error at the ends {err:.3} px (bound {bound})");
-    }
+    ];
+    check_flow_errors(&bounds, " at the ends", |k| !(3..20).contains(&k));
 }
 
 /// Mean flow inside a disc of radius `r` translating by `v` per frame, over the middle frames,
