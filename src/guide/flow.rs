@@ -327,8 +327,9 @@ impl Task {
         if !fits(1) {
             return Estimate::Unmeasured;
         }
+        let fits_real = |k: isize| real(k) && fits(k);
         if rt > 0 && fits(-1) {
-            let widens = |k: isize| real(k) && fits(k) && along(k);
+            let widens = |k: isize| fits_real(k) && along(k);
             let mut r = 0;
             while r + 1 < rt && widens(-(r as isize) - 2) && widens(r as isize + 2) {
                 r += 1;
@@ -336,7 +337,6 @@ impl Task {
             return Estimate::Central(r);
         }
         let mut r = 0;
-        let fits_real = |k: isize| real(k) && fits(k);
         while r < rt && fits_real(-(r as isize) - 1) && fits_real(r as isize + 2) {
             r += 1;
         }
