@@ -126,7 +126,9 @@ pub struct SynthFlags {
     /// paint runs through as many exemplar frames per frame as its motion asks, as in the
     /// paper: a fast limb ages its paint several frames at a time and boils), full-carry (a
     /// moving shape's exemplar time steps supply part of its motion, as in the paper: its
-    /// paint's texture lags behind the shape and boils), contrast-balance (the
+    /// paint's texture lags behind the shape and boils), travel-hold (the border paint of a
+    /// travelling shape steps through the exemplar's frames like the rest: a swinging limb's
+    /// paint changes in place as it swings, and boils), contrast-balance (the
     /// occurrence penalty spreads the use over the exemplar's positions only, as in the paper,
     /// and the search drifts to the exemplar's flattest paint; same as --contrast-balance 0),
     /// grain-phase (the grain of a patch that lands between exemplar pixels keeps only what
@@ -159,6 +161,7 @@ pub enum Part {
     Aging,
     Pace,
     FullCarry,
+    TravelHold,
     ContrastBalance,
     GrainPhase,
     ToneMatch,
@@ -263,6 +266,7 @@ impl SynthFlags {
                 Part::Aging => b.aging(false),
                 Part::Pace => b.pace(false),
                 Part::FullCarry => b.full_carry(false),
+                Part::TravelHold => b.travel_hold(false),
                 Part::ContrastBalance => b.contrast_balance(0.0),
                 Part::GrainPhase => b.grain_phase(false),
                 Part::ToneMatch => b.tone_match(false),
@@ -468,7 +472,7 @@ mod tests {
         let off = off.finest_uniformity(false);
         let off =
             off.settle(false).receding_hold(false).aging(false).pace(false).full_carry(false).contrast_balance(0.0);
-        let off = off.grain_phase(false);
+        let off = off.travel_hold(false).grain_phase(false);
         let off = off.tone_match(false).repaint_first(false).turn(false).build().unwrap();
         assert_eq!(p, off);
     }

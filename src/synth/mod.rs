@@ -639,6 +639,10 @@ fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevS
         hold_time,
         max_step: if moves && p.parts.pace && p.parts.advect { 1 } else { usize::MAX },
         full_carry: moves && p.parts.full_carry,
+        travel_hold: p.parts.travel_hold
+            && p.parts.full_carry
+            && p.parts.advect
+            && shift::travels(g.mask.data(), &prev.masks[0]),
         turn: p.turns(src.levels[0].frames),
     };
     shift::shift_nnf(&inputs, &prev.nnf0)

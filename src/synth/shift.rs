@@ -54,6 +54,9 @@ pub(crate) struct ShiftInputs<'a> {
     /// The time step supplies none of the motion: the advection carries all of it (where the
     /// shape moves rather than grows; [`super::ParamsBuilder::full_carry`]).
     pub full_carry: bool,
+    /// The shape travels ([`travels`]) and its border paint holds its exemplar frame while it
+    /// moves ([`holds`]; [`super::ParamsBuilder::travel_hold`]).
+    pub travel_hold: bool,
     /// The exemplar is a still: every carried match turns with the target's local rotation
     /// ([`flow_turn`]) — where the field is carried along the motion (with the time shift and
     /// the advection; without them nothing is carried, and nothing turns).
@@ -63,6 +66,11 @@ pub(crate) struct ShiftInputs<'a> {
 /// Pixels of motion that one frame of deviation from the nominal step costs in the paper's
 /// rule alone (no advection): a tie-breaker, far below any real difference of motion.
 const TIE_BREAK: f32 = 0.02;
+
+/// The target speed, pixels per frame, from which travelling border paint holds its exemplar
+/// frame ([`holds`]): half a pixel, below which a carried texture barely moves and paint reads
+/// as resting.
+pub(crate) const HOLD_SPEED: f32 = 0.5;
 
 /// Fixed-point steps of [`carried_in`]'s inversion of the warp.
 const INVERSION_STEPS: usize = 3;
@@ -140,12 +148,29 @@ fn hold_receding(inp: &ShiftInputs, m: &Match, q: usize) -> bool {
 /// Then aged ([`aged`], which leaves [`ShiftInputs::hold_time`]'s matches alone): a held
 /// receding match steps one frame forward too.
 fn step_of(inp: &ShiftInputs, m: &Match, q: usize, dt: f32, c: f32) -> Option<(usize, f32)> {
+    if holds(inp, q, q) {
+        return held(inp, m);
+    }
     let step = if inp.hold_time || hold_receding(inp, m, q) {
-        inp.src.info_at(m.i as usize, m.x, m.y).map(|_| (m.i as usize, 0.0))
+        held(inp, m)
     } else {
         time_step(inp.src, m, dt, c, inp.max_step)
     }?;
     Some(aged(inp, m, step))
+}
+
+/// Whether the paint carried to target pixel `q` from pixel `from` of the previous frame holds
+/// its exemplar frame ([`super::ParamsBuilder::travel_hold`]): the shape travels
+/// ([`ShiftInputs::travel_hold`]), the paint moves at least [`HOLD_SPEED`] (the previous
+/// frame's flow where it was), and it lands in the border band (within b of the edge).
+fn holds(inp: &ShiftInputs, from: usize, q: usize) -> bool {
+    inp.travel_hold && inp.flow_prev[from].length() >= HOLD_SPEED && inp.dist_cur[q] <= inp.band
+}
+
+/// A match that keeps its exemplar frame and supplies no motion: `(i, 0)`, where its center
+/// lies inside the exemplar (as a time step needs).
+fn held(inp: &ShiftInputs, m: &Match) -> Option<(usize, f32)> {
+    inp.src.info_at(m.i as usize, m.x, m.y).map(|_| (m.i as usize, 0.0))
 }
 
 /// The time step `(i + Δi, supplied motion)` of the carried match `m`, aged
@@ -173,12 +198,22 @@ fn aged(inp: &ShiftInputs, m: &Match, (best_i, supplied): (usize, f32)) -> (usiz
 /// up (an exemplar's own bloom; a growing shape), whose front the search paints as new paint
 /// (the extent term).
 pub(crate) fn moves_rather_than_grows(cur: &[bool], prev: &[bool]) -> bool {
-    let (mut new, mut lost) = (0usize, 0usize);
-    for (&c, &p) in cur.iter().zip(prev) {
-        new += (c && !p) as usize;
-        lost += (p && !c) as usize;
-    }
+    let (new, lost) = area_change(cur, prev);
     new <= 3 * lost
+}
+
+/// Whether a shape travels from the previous mask to the current one: it moves rather than
+/// grows ([`moves_rather_than_grows`]) and also newly covers at least a third as much area as
+/// it gives up — a part that translates, turns or swings, not one that shrinks (which only
+/// gives up area: its edge recedes, as paint drying back does) nor one that stands still.
+pub(crate) fn travels(cur: &[bool], prev: &[bool]) -> bool {
+    let (new, lost) = area_change(cur, prev);
+    new > 0 && lost > 0 && new <= 3 * lost && lost <= 3 * new
+}
+
+/// Pixels the current mask newly covers and pixels it gives up, against the previous one.
+fn area_change(cur: &[bool], prev: &[bool]) -> (usize, usize) {
+    cur.iter().zip(prev).fold((0, 0), |(new, lost), (&c, &p)| (new + (c && !p) as usize, lost + (p && !c) as usize))
 }
 
 /// The match a pixel `q` the previous frame did not paint takes from the pixel its motion came
@@ -210,20 +245,22 @@ fn carried_in(inp: &ShiftInputs, prev: &Nnf, q: usize, c: f32) -> Option<Match> 
         }
     }
     let dt = inp.ext_cur[q] - inp.ext_prev[q];
-    let (m, i, x, y) = warped_from(inp, prev, p, dt, c)?;
+    let (m, i, x, y) = warped_from(inp, prev, p, q, dt, c)?;
     Some(placed(inp, q, m, i, x, y))
 }
 
-/// The previous frame's match nearest to `p` (at `⌊p⌉`), time-shifted under the extent change
-/// `dt` ([`time_step`], at most [`ShiftInputs::max_step`] frames; [`aged`]), and the point it
-/// stands for at `p`: its position offset by `M·(p − ⌊p⌉)`. `None` where `⌊p⌉` is off the
-/// field or had no match.
-fn warped_from(inp: &ShiftInputs, prev: &Nnf, p: Vec2, dt: f32, c: f32) -> Option<(Match, usize, f32, f32)> {
-    let m = prev.data[prev.index_near(p)?];
+/// The previous frame's match nearest to `p` (at `⌊p⌉`), carried to target pixel `q` and
+/// time-shifted under the extent change `dt` ([`time_step`], at most [`ShiftInputs::max_step`]
+/// frames; [`aged`]) or held in its frame ([`holds`]), and the point it stands for at `p`: its
+/// position offset by `M·(p − ⌊p⌉)`. `None` where `⌊p⌉` is off the field or had no match.
+fn warped_from(inp: &ShiftInputs, prev: &Nnf, p: Vec2, q: usize, dt: f32, c: f32) -> Option<(Match, usize, f32, f32)> {
+    let from = prev.index_near(p)?;
+    let m = prev.data[from];
     if !m.ok {
         return None;
     }
-    let (i, _) = aged(inp, &m, time_step(inp.src, &m, dt, c, inp.max_step)?);
+    let (i, _) =
+        if holds(inp, from, q) { held(inp, &m)? } else { aged(inp, &m, time_step(inp.src, &m, dt, c, inp.max_step)?) };
     let r = p.round();
     let (dx, dy) = m.rotate(p.x - r.x, p.y - r.y);
     Some((m, i, m.x + dx, m.y + dy))
@@ -334,7 +371,7 @@ pub(crate) fn shift_nnf(inp: &ShiftInputs, prev: &Nnf) -> Nnf {
             let rest = (speed - supplied).clamp(-speed, speed);
             let back = f / speed * rest;
             let p = Vec2::new((q % prev.w) as f32, (q / prev.w) as f32) - back;
-            if let Some(from) = warped_from(inp, prev, p, dt, c) {
+            if let Some(from) = warped_from(inp, prev, p, q, dt, c) {
                 (m, best_i, x, y) = from;
             } else {
                 let (dx, dy) = m.rotate(back.x, back.y);

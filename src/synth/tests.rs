@@ -369,6 +369,15 @@ fn shifted_frames_at(
     age: bool,
     depth: f32,
 ) -> Vec<u16> {
+    shift_uniform(flip, speed, dt, depth, |inp| {
+        (inp.receding_hold, inp.max_step, inp.age) = (receding_hold, max_step, age);
+    })
+}
+
+/// SHIFTNNF of the uniform field of [`shifted_frames`] with the target `depth` pixels from its
+/// edge and the inputs as `set` leaves them (from the paper's rule: no receding hold, no aging,
+/// unbounded steps, no full carry, no hold while travelling): the shifted matches' frames.
+fn shift_uniform(flip: bool, speed: f32, dt: f32, depth: f32, set: impl FnOnce(&mut shift::ShiftInputs)) -> Vec<u16> {
     let (rgb, g) = disc_exemplar(64, 64, 8, 1);
     let params = Params::builder().build().unwrap();
     let source = Source::from_parts(&rgb, &g, &params, 6.0).unwrap();
@@ -380,28 +389,56 @@ fn shifted_frames_at(
     }
     let n = w * h;
     let (zero, grown, flow) = (vec![0.0f32; n], vec![dt; n], vec![Vec2::new(speed, 0.0); n]);
-    let inp = shift::ShiftInputs {
+    let (dist, active) = (vec![depth; n], vec![true; n]);
+    let mut inp = shift::ShiftInputs {
         src,
         ext_prev: &zero,
         ext_cur: &grown,
         flow_prev: &flow,
         flow_cur: &flow,
-        dist_cur: &vec![depth; n],
+        dist_cur: &dist,
         band: 6.0,
         step_cost: shift::step_cost(source.pyramid.ext_scale, src.frames),
-        active: &vec![true; n],
+        active: &active,
         carry_new: true,
         time_shift: true,
         advect: true,
         settle: false,
-        receding_hold,
-        age,
+        receding_hold: false,
+        age: false,
         hold_time: false,
-        max_step,
+        max_step: usize::MAX,
         full_carry: false,
+        travel_hold: false,
         turn: false,
     };
+    set(&mut inp);
     shift::shift_nnf(&inp, &prev).data.iter().filter(|m| m.ok).map(|m| m.i).collect()
+}
+
+/// Travelling border paint holds its exemplar frame (`ParamsBuilder::travel_hold`): on a
+/// shape that travels (paced, fully carried, aging), a match moving 2 px a frame within the
+/// border band (b = 6) keeps frame 5, whether the target's extent grew or not; one deeper
+/// than b, or one moving less than half a pixel a frame, ages to frame 6; without the hold
+/// the band's ages too.
+#[test]
+fn travelling_border_paint_holds_its_exemplar_frame() {
+    let frames = |speed: f32, depth: f32, dt: f32, hold: bool| {
+        shift_uniform(false, speed, dt, depth, |inp| {
+            (inp.age, inp.max_step, inp.full_carry, inp.travel_hold) = (true, 1, true, hold);
+        })
+    };
+    let all = |v: &[u16], i: u16| !v.is_empty() && v.iter().all(|&k| k == i);
+    for dt in [0.0, 3.0] {
+        let band = frames(2.0, 3.0, dt, true);
+        assert!(all(&band, 5), "the band holds (dt {dt}): {band:?}");
+        let deep = frames(2.0, 20.0, dt, true);
+        assert!(all(&deep, 6), "the interior ages (dt {dt}): {deep:?}");
+        let resting = frames(0.3, 3.0, dt, true);
+        assert!(all(&resting, 6), "resting paint ages (dt {dt}): {resting:?}");
+        let off = frames(2.0, 3.0, dt, false);
+        assert!(all(&off, 6), "without the hold the band ages (dt {dt}): {off:?}");
+    }
 }
 
 /// Where the shape moves rather than grows (`ParamsBuilder::pace`) a match steps at most one
