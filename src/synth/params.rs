@@ -689,15 +689,15 @@ impl ParamsBuilder {
     /// yellow-granules). On a shape that only travels nothing spreads: the carried texture is
     /// expected to move with the part, and the band's change, in place, reads as boiling — a
     /// thin part (a limb) is all band. Measured (instrumented, yellow-granules, the suite's
-    /// swinging limb, seed 1): 66–73 % of the limb's carried matches stepped one frame per
-    /// frame over its first ten frames and 5–18 % two or backwards; the flow-compensated
+    /// swinging limb, seed 1): 60–73 % of the limb's carried matches stepped one frame per
+    /// frame over its first ten frames and 10–28 % two or backwards; the flow-compensated
     /// residual of the pixels whose match continued the previous frame's rigidly (same frame,
-    /// within 1 px) was 0.0081, of those that stepped 0.0107–0.0204, and the steps carried
-    /// 56 % of the residual. Holding every carried match on the limb (a scratch build) took its
+    /// within 1 px) was 0.0081, of those that stepped 0.0107–0.0204, and the 72 % that
+    /// stepped carried 81 % of the residual. Holding every carried match on the limb (a scratch build) took its
     /// incoherent change from 1.64 to 1.03 of the exemplar's, and stepping them by exactly one
     /// frame with nothing else changed left it at 1.69: the step itself is what boils. Held in
     /// the interior too, the paint of travelling ellipses lost the streaks its aging gives it
-    /// (contrast of the turning ellipse 0.96–0.99 → 0.87–0.90 with green-wash and
+    /// (contrast of the turning ellipse 0.94–0.99 → 0.87–0.90 with green-wash and
     /// yellow-granules); so only the band holds. Not in the paper. Off = every carried match
     /// takes its time step and ages. Default: on.
     pub fn travel_hold(mut self, on: bool) -> Self {

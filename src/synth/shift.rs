@@ -316,7 +316,8 @@ fn moved(src: &SourceLevel, m: &Match, x: f32, y: f32) -> Option<Match> {
 /// [`ShiftInputs::max_step`]: one frame where the shape moves rather than grows (see
 /// [`super::ParamsBuilder::pace`]). A held match keeps its frame ([`step_of`]); with
 /// [`ShiftInputs::age`] every match steps at least one frame forward ([`aged`]: paint dries
-/// on, whether or not its shape moves).
+/// on, whether or not its shape moves) — but where the shape travels, border paint that moves
+/// keeps its frame ([`holds`], [`ShiftInputs::travel_hold`]).
 ///
 /// Then, with [`ShiftInputs::advect`]: the motion the time shift did not supply is carried by
 /// warping the field — the target pixel q takes the shifted match of the previous frame's
