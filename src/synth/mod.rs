@@ -619,7 +619,8 @@ impl Synthesizer {
 /// of its pyramid), at full resolution; with `hold_time`, every match keeps its exemplar frame.
 fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevState, hold_time: bool) -> Nnf {
     let active: Vec<bool> = source::dilate(&g.mask, HALF).into_vec();
-    let moves = shift::moves_rather_than_grows(g.mask.data(), &prev.masks[0]);
+    let change = shift::AreaChange::of(g.mask.data(), &prev.masks[0]);
+    let moves = change.moves_rather_than_grows();
     let inputs = shift::ShiftInputs {
         carry_new: moves,
         src: &src.levels[0],
@@ -639,10 +640,7 @@ fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevS
         hold_time,
         max_step: if moves && p.parts.pace && p.parts.advect { 1 } else { usize::MAX },
         full_carry: moves && p.parts.full_carry,
-        travel_hold: p.parts.travel_hold
-            && p.parts.full_carry
-            && p.parts.advect
-            && shift::travels(g.mask.data(), &prev.masks[0]),
+        travel_hold: p.parts.travel_hold && p.parts.full_carry && p.parts.advect && change.travels(),
         turn: p.turns(src.levels[0].frames),
     };
     shift::shift_nnf(&inputs, &prev.nnf0)

@@ -30,7 +30,7 @@ pub(crate) struct ShiftInputs<'a> {
     /// Pixels the current frame synthesizes.
     pub active: &'a [bool],
     /// Pixels the previous frame did not paint take the match their motion came from
-    /// ([`carried_in`]; where the shape moves rather than grows, [`moves_rather_than_grows`]).
+    /// ([`carried_in`]; where the shape moves rather than grows, [`AreaChange::moves_rather_than_grows`]).
     pub carry_new: bool,
     /// The time shift ([`super::ParamsBuilder::time_shift`]).
     pub time_shift: bool,
@@ -54,7 +54,7 @@ pub(crate) struct ShiftInputs<'a> {
     /// The time step supplies none of the motion: the advection carries all of it (where the
     /// shape moves rather than grows; [`super::ParamsBuilder::full_carry`]).
     pub full_carry: bool,
-    /// The shape travels ([`travels`]) and its border paint holds its exemplar frame while it
+    /// The shape travels ([`AreaChange::travels`]) and its border paint holds its exemplar frame while it
     /// moves ([`holds`]; [`super::ParamsBuilder::travel_hold`]).
     pub travel_hold: bool,
     /// The exemplar is a still: every carried match turns with the target's local rotation
@@ -191,29 +191,41 @@ fn aged(inp: &ShiftInputs, m: &Match, (best_i, supplied): (usize, f32)) -> (usiz
     (next, 0.0)
 }
 
-/// Whether a shape moves rather than grows from the previous mask to the current one (both
-/// over the same window): it gave up at least a third as much area as it newly covers, so
-/// what it newly covers is mostly the same paint moved along — a part that translates, turns
-/// or swings — and not paint spreading onto new paper, which grows without giving anything
-/// up (an exemplar's own bloom; a growing shape), whose front the search paints as new paint
-/// (the extent term).
-pub(crate) fn moves_rather_than_grows(cur: &[bool], prev: &[bool]) -> bool {
-    let (new, lost) = area_change(cur, prev);
-    new <= 3 * lost
+/// How a shape's mask changed from the previous frame to the current one (both over the same
+/// window): the pixels it newly covers and the pixels it gives up, counted in one pass.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct AreaChange {
+    new: usize,
+    lost: usize,
 }
 
-/// Whether a shape travels from the previous mask to the current one: it moves rather than
-/// grows ([`moves_rather_than_grows`]) and also newly covers at least a third as much area as
-/// it gives up — a part that translates, turns or swings, not one that shrinks (which only
-/// gives up area: its edge recedes, as paint drying back does) nor one that stands still.
-pub(crate) fn travels(cur: &[bool], prev: &[bool]) -> bool {
-    let (new, lost) = area_change(cur, prev);
-    new > 0 && lost > 0 && new <= 3 * lost && lost <= 3 * new
-}
+impl AreaChange {
+    /// The change from `prev` to `cur`.
+    pub(crate) fn of(cur: &[bool], prev: &[bool]) -> AreaChange {
+        let (new, lost) = cur
+            .iter()
+            .zip(prev)
+            .fold((0, 0), |(new, lost), (&c, &p)| (new + (c && !p) as usize, lost + (p && !c) as usize));
+        AreaChange { new, lost }
+    }
 
-/// Pixels the current mask newly covers and pixels it gives up, against the previous one.
-fn area_change(cur: &[bool], prev: &[bool]) -> (usize, usize) {
-    cur.iter().zip(prev).fold((0, 0), |(new, lost), (&c, &p)| (new + (c && !p) as usize, lost + (p && !c) as usize))
+    /// Whether the shape moves rather than grows: it gave up at least a third as much area as
+    /// it newly covers, so what it newly covers is mostly the same paint moved along — a part
+    /// that translates, turns or swings — and not paint spreading onto new paper, which grows
+    /// without giving anything up (an exemplar's own bloom; a growing shape), whose front the
+    /// search paints as new paint (the extent term).
+    pub(crate) fn moves_rather_than_grows(self) -> bool {
+        self.new <= 3 * self.lost
+    }
+
+    /// Whether the shape travels: it moves rather than grows
+    /// ([`AreaChange::moves_rather_than_grows`]) and also newly covers at least a third as
+    /// much area as it gives up — a part that translates, turns or swings, not one that
+    /// shrinks (which only gives up area: its edge recedes, as paint drying back does) nor one
+    /// that stands still.
+    pub(crate) fn travels(self) -> bool {
+        self.new > 0 && self.lost > 0 && self.moves_rather_than_grows() && self.lost <= 3 * self.new
+    }
 }
 
 /// The match a pixel `q` the previous frame did not paint takes from the pixel its motion came

@@ -308,12 +308,12 @@ fn growth_is_told_from_motion() {
         (0..64 * 64).map(|i| ((i % 64) as f32 - c).hypot((i / 64) as f32 - 32.0) < r).collect()
     };
     // Translating: as much given up as newly covered.
-    assert!(shift::moves_rather_than_grows(&disc(34.0, 10.0), &disc(30.0, 10.0)));
+    assert!(shift::AreaChange::of(&disc(34.0, 10.0), &disc(30.0, 10.0)).moves_rather_than_grows());
     // Growing in place, or growing while drifting slowly: new paper.
-    assert!(!shift::moves_rather_than_grows(&disc(32.0, 14.0), &disc(32.0, 10.0)));
-    assert!(!shift::moves_rather_than_grows(&disc(33.0, 13.0), &disc(32.0, 10.0)));
+    assert!(!shift::AreaChange::of(&disc(32.0, 14.0), &disc(32.0, 10.0)).moves_rather_than_grows());
+    assert!(!shift::AreaChange::of(&disc(33.0, 13.0), &disc(32.0, 10.0)).moves_rather_than_grows());
     // Shrinking: nothing newly covered that could be new paint.
-    assert!(shift::moves_rather_than_grows(&disc(32.0, 8.0), &disc(32.0, 10.0)));
+    assert!(shift::AreaChange::of(&disc(32.0, 8.0), &disc(32.0, 10.0)).moves_rather_than_grows());
 }
 
 #[test]
