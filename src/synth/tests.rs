@@ -410,7 +410,6 @@ fn shift_uniform(flip: bool, speed: f32, dt: f32, depth: f32, set: impl FnOnce(&
         max_step: usize::MAX,
         full_carry: false,
         travel_hold: false,
-        moving: shift::moves_noticeably(&flow),
         turn: false,
     };
     set(&mut inp);
@@ -420,8 +419,8 @@ fn shift_uniform(flip: bool, speed: f32, dt: f32, depth: f32, set: impl FnOnce(&
 /// Travelling border paint holds its exemplar frame (`ParamsBuilder::travel_hold`): on a
 /// shape that travels (paced, fully carried, aging), a match moving 2 px a frame within the
 /// border band (b = 6) keeps frame 5, whether the target's extent grew or not; one deeper
-/// than b, or one on a shape that moves less than half a pixel a frame, ages to frame 6;
-/// without the hold the band's ages too.
+/// than b, or one moving less than half a pixel a frame, ages to frame 6; without the hold
+/// the band's ages too.
 #[test]
 fn travelling_border_paint_holds_its_exemplar_frame() {
     let frames = |speed: f32, depth: f32, dt: f32, hold: bool| {
@@ -440,23 +439,6 @@ fn travelling_border_paint_holds_its_exemplar_frame() {
         let off = frames(2.0, 3.0, dt, false);
         assert!(all(&off, 6), "without the hold the band ages (dt {dt}): {off:?}");
     }
-}
-
-/// Whether a shape moves enough for all of its border paint to hold is decided for the shape,
-/// by the 90th percentile of its pixels' speeds (`shift::moves_noticeably`): a limb whose tip
-/// moves 2 px a frame holds at its resting shoulder too; a shape that moves 0.3 px a frame
-/// everywhere, or not at all, or only in a few pixels (whose paint holds by its own speed),
-/// does not.
-#[test]
-fn a_shape_moves_noticeably_by_its_faster_pixels() {
-    let limb: Vec<Vec2> = (0..100).map(|k| Vec2::new(0.0, 2.0 * k as f32 / 99.0)).collect();
-    assert!(shift::moves_noticeably(&limb), "a swinging limb: its tip moves 2 px a frame");
-    // 95 of 100 pixels at rest, five fast: the 90th percentile is at rest.
-    let mostly_still: Vec<Vec2> = (0..100).map(|k| Vec2::new(if k < 95 { 0.1 } else { 3.0 }, 0.0)).collect();
-    assert!(!shift::moves_noticeably(&mostly_still), "a few fast pixels do not make the shape move");
-    assert!(!shift::moves_noticeably(&[Vec2::new(0.3, 0.0); 50]), "0.3 px a frame everywhere");
-    assert!(!shift::moves_noticeably(&[Vec2::ZERO; 50]), "at rest");
-    assert!(!shift::moves_noticeably(&[]), "no paint");
 }
 
 /// Where the shape moves rather than grows (`ParamsBuilder::pace`) a match steps at most one
