@@ -53,10 +53,10 @@ fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
 /// advection went unseen.
 ///
 /// Update `PINNED` only in a commit that changes the output on purpose, and say so in its
-/// message (the last: the flow guide's temporal windows read only real frames, never the
-/// replicated ends of the sequence, and the last frame's velocity is measured backwards, issue
-/// 13; before: the tone match maps each depth's densities onto the exemplar's quantile to
-/// quantile instead of scaling them by the ratio of the means).
+/// message (the last: travelling border paint holds its exemplar frame,
+/// `ParamsBuilder::travel_hold`, issue 13; before: the flow guide's temporal windows read only
+/// real frames, never the replicated ends of the sequence, and the last frame's velocity is
+/// measured backwards).
 #[test]
 fn engine_output_is_pinned() {
     const PINNED: u64 = 0xca05_3c43_28b0_893f;

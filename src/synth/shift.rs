@@ -70,7 +70,7 @@ const TIE_BREAK: f32 = 0.02;
 /// The target speed, pixels per frame, from which travelling border paint holds its exemplar
 /// frame ([`holds`]): half a pixel, below which a carried texture barely moves and paint reads
 /// as resting.
-pub(crate) const HOLD_SPEED: f32 = 0.5;
+const HOLD_SPEED: f32 = 0.5;
 
 /// Fixed-point steps of [`carried_in`]'s inversion of the warp.
 const INVERSION_STEPS: usize = 3;
@@ -224,7 +224,8 @@ impl AreaChange {
     /// shrinks (which only gives up area: its edge recedes, as paint drying back does) nor one
     /// that stands still.
     pub(crate) fn travels(self) -> bool {
-        self.new > 0 && self.lost > 0 && self.moves_rather_than_grows() && self.lost <= 3 * self.new
+        // `new > 0` with `moves_rather_than_grows` (new ≤ 3·lost) also gives `lost > 0`.
+        self.new > 0 && self.moves_rather_than_grows() && self.lost <= 3 * self.new
     }
 }
 
