@@ -641,6 +641,7 @@ fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevS
         max_step: if moves && p.parts.pace && p.parts.advect { 1 } else { usize::MAX },
         full_carry: moves && p.parts.full_carry,
         travel_hold: p.parts.travel_hold && p.parts.full_carry && p.parts.advect && change.travels(),
+        moving: shift::all_rim(g.dist.data(), src.border_width) && shift::moves_noticeably(&prev.flow),
         turn: p.turns(src.levels[0].frames),
     };
     shift::shift_nnf(&inputs, &prev.nnf0)

@@ -677,11 +677,13 @@ impl ParamsBuilder {
     /// Travelling border paint holds its exemplar frame (SHIFTNNF, module `shift`): where the
     /// shape travels — it newly covers and gives up about as much area from one frame to the
     /// next (within a factor of three either way: a swinging limb, a translating or turning
-    /// shape; not a growing, shrinking or still one) — a carried match that moves at least
-    /// half a pixel a frame and lands within the border width b of the edge keeps its
-    /// exemplar frame: neither the extents' time step nor the aging ([`Self::aging`]) steps
-    /// it, and the advection carries it whole. Interior paint, and paint at rest, age as
-    /// before.
+    /// shape; not a growing, shrinking or still one) — a carried match that lands within the
+    /// border width b of the edge keeps its exemplar frame when the match moves at least half
+    /// a pixel a frame or, on a thin part (no deeper than 2 b: a limb, a stroke), when the
+    /// part moves noticeably (the 90th percentile of its pixels' speeds at least half a pixel
+    /// a frame): neither the extents' time step nor the aging
+    /// ([`Self::aging`]) steps it, and the advection carries it whole. Interior paint, and
+    /// the paint of a shape at rest, age as before.
     ///
     /// An exemplar frame step changes the paint at a fixed point of the exemplar by the
     /// exemplar's own change there, and its border band, where a bloom's front deposits its
@@ -698,7 +700,14 @@ impl ParamsBuilder {
     /// frame with nothing else changed left it at 1.69: the step itself is what boils. Held in
     /// the interior too, the paint of travelling ellipses lost the streaks its aging gives it
     /// (contrast of the turning ellipse 0.94–0.99 → 0.87–0.90 with green-wash and
-    /// yellow-granules); so only the band holds. Not in the paper. Off = every carried match
+    /// yellow-granules); so only the band holds. Whether a thin part moves is the part's:
+    /// judged per pixel alone, a limb's paint near its shoulder, and all of it at the turn of
+    /// each swing, aged in place and boiled (yellow-granules' limb, seed 1: incoherent change
+    /// 1.62 and 1.66 in frames 13–14, held 0.94 and 0.95). A large shape's rim is judged per
+    /// pixel: held as a whole while the shape drifts slowly, it stopped aging and lost its
+    /// texture over hundreds of frames (green-wash, the suite's 300-frame target at half size,
+    /// without the tone match: lowest window 0.84 of the first's contrast, against 0.89).
+    /// Not in the paper. Off = every carried match
     /// takes its time step and ages. Default: on.
     pub fn travel_hold(mut self, on: bool) -> Self {
         self.p.parts.travel_hold = on;

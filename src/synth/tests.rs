@@ -410,6 +410,7 @@ fn shift_uniform(flip: bool, speed: f32, dt: f32, depth: f32, set: impl FnOnce(&
         max_step: usize::MAX,
         full_carry: false,
         travel_hold: false,
+        moving: shift::all_rim(&dist, 6.0) && shift::moves_noticeably(&flow),
         turn: false,
     };
     set(&mut inp);
@@ -419,8 +420,8 @@ fn shift_uniform(flip: bool, speed: f32, dt: f32, depth: f32, set: impl FnOnce(&
 /// Travelling border paint holds its exemplar frame (`ParamsBuilder::travel_hold`): on a
 /// shape that travels (paced, fully carried, aging), a match moving 2 px a frame within the
 /// border band (b = 6) keeps frame 5, whether the target's extent grew or not; one deeper
-/// than b, or one moving less than half a pixel a frame, ages to frame 6; without the hold
-/// the band's ages too.
+/// than b, or one on a shape that moves less than half a pixel a frame, ages to frame 6;
+/// without the hold the band's ages too.
 #[test]
 fn travelling_border_paint_holds_its_exemplar_frame() {
     let frames = |speed: f32, depth: f32, dt: f32, hold: bool| {
@@ -439,6 +440,37 @@ fn travelling_border_paint_holds_its_exemplar_frame() {
         let off = frames(2.0, 3.0, dt, false);
         assert!(all(&off, 6), "without the hold the band ages (dt {dt}): {off:?}");
     }
+}
+
+/// Whether a thin part moves enough for all of its border paint to hold is decided for the part,
+/// by the 90th percentile of its pixels' speeds (`shift::moves_noticeably`): a limb whose tip
+/// moves 2 px a frame holds at its resting shoulder too; a shape that moves 0.3 px a frame
+/// everywhere, or not at all, or only in a few pixels (whose paint holds by its own speed),
+/// does not.
+#[test]
+fn a_shape_moves_noticeably_by_its_faster_pixels() {
+    let limb: Vec<Vec2> = (0..100).map(|k| Vec2::new(0.0, 2.0 * k as f32 / 99.0)).collect();
+    assert!(shift::moves_noticeably(&limb), "a swinging limb: its tip moves 2 px a frame");
+    // 95 of 100 pixels at rest, five fast: the 90th percentile is at rest.
+    let mostly_still: Vec<Vec2> = (0..100).map(|k| Vec2::new(if k < 95 { 0.1 } else { 3.0 }, 0.0)).collect();
+    assert!(!shift::moves_noticeably(&mostly_still), "a few fast pixels do not make the shape move");
+    assert!(!shift::moves_noticeably(&[Vec2::new(0.3, 0.0); 50]), "0.3 px a frame everywhere");
+    assert!(!shift::moves_noticeably(&[Vec2::ZERO; 50]), "at rest");
+    assert!(!shift::moves_noticeably(&[]), "no paint");
+}
+
+/// Only a thin part holds all of its border paint when it moves noticeably (`shift::all_rim`):
+/// a limb 7 px thick is all rim for a border width of 4 or 6.5 px, a blob 52 px deep (the
+/// suite's 300-frame target at half size) is not, nor is a shape with nothing inside.
+#[test]
+fn only_a_thin_part_is_all_rim() {
+    // A limb's distance field: 0.5 at its edge to 7 in its middle, the rest outside.
+    let limb: Vec<f32> = (0..30).map(|k| 7.5 - (k as f32 - 14.5).abs()).collect();
+    assert!(shift::all_rim(&limb, 4.0) && shift::all_rim(&limb, 6.5), "a limb is all rim");
+    let blob: Vec<f32> = (0..105).map(|k| 52.5 - (k as f32 - 52.0).abs()).collect();
+    assert!(!shift::all_rim(&blob, 3.5) && !shift::all_rim(&blob, 7.0), "a blob's middle is not rim");
+    assert!(!shift::all_rim(&[-3.0; 20], 4.0), "nothing inside");
+    assert!(!shift::all_rim(&[], 4.0), "no pixels");
 }
 
 /// Where the shape moves rather than grows (`ParamsBuilder::pace`) a match steps at most one
