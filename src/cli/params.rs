@@ -132,7 +132,9 @@ pub struct SynthFlags {
     /// occurrence penalty spreads the use over the exemplar's positions only, as in the paper,
     /// and the search drifts to the exemplar's flattest paint; same as --contrast-balance 0),
     /// grain-phase (the grain of a patch that lands between exemplar pixels keeps only what
-    /// the interpolation leaves of it: softer paint on moving shapes), tone-match (the output
+    /// the interpolation leaves of it: softer paint on moving shapes), grain-match (the grain
+    /// keeps the amplitude the vote left it: carried paint's grain fades as the field is
+    /// stretched, a growing shape's interior grows calmer), tone-match (the output
     /// keeps the density of the paint its patches were stitched from: paler than the
     /// exemplar at the same distance from the edge on shapes larger than its paint),
     /// repaint-first (the first frame is painted once, from a random field: its rim band is
@@ -164,6 +166,7 @@ pub enum Part {
     TravelHold,
     ContrastBalance,
     GrainPhase,
+    GrainMatch,
     ToneMatch,
     RepaintFirst,
     Turn,
@@ -269,6 +272,7 @@ impl SynthFlags {
                 Part::TravelHold => b.travel_hold(false),
                 Part::ContrastBalance => b.contrast_balance(0.0),
                 Part::GrainPhase => b.grain_phase(false),
+                Part::GrainMatch => b.grain_match(false),
                 Part::ToneMatch => b.tone_match(false),
                 Part::RepaintFirst => b.repaint_first(false),
                 Part::Turn => b.turn(false),
@@ -472,7 +476,7 @@ mod tests {
         let off = off.finest_uniformity(false);
         let off =
             off.settle(false).receding_hold(false).aging(false).pace(false).full_carry(false).contrast_balance(0.0);
-        let off = off.travel_hold(false).grain_phase(false);
+        let off = off.travel_hold(false).grain_phase(false).grain_match(false);
         let off = off.tone_match(false).repaint_first(false).turn(false).build().unwrap();
         assert_eq!(p, off);
     }

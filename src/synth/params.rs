@@ -112,6 +112,7 @@ pub(crate) struct Parts {
     pub travel_hold: bool,
     pub keep_grain: bool,
     pub grain_phase: bool,
+    pub grain_match: bool,
     pub tone_match: bool,
     pub repaint_first: bool,
     pub turn: bool,
@@ -139,6 +140,7 @@ impl Default for Parts {
             travel_hold: true,
             keep_grain: true,
             grain_phase: true,
+            grain_match: true,
             tone_match: true,
             repaint_first: true,
             turn: true,
@@ -947,6 +949,26 @@ impl ParamsBuilder {
     /// 0.28 and 0.27).
     pub fn grain_phase(mut self, on: bool) -> Self {
         self.p.parts.grain_phase = on;
+        self
+    }
+
+    /// Give the output's grain back the exemplar's amplitude at each distance from the edge
+    /// deeper than the border band, in the frames its matches come from (module `tone`,
+    /// `grain_gains`; with [`Self::keep_grain`] and [`Self::tone_match`]): the tone match gives
+    /// the low-pass the exemplar's tones and detail, and the grain, voted apart and added back
+    /// after, kept what the vote left of it. Carried paint sits between the exemplar's pixels
+    /// and its voters agree less as the field is stretched, so its grain faded from frame to
+    /// frame (the still swatch on the quality suite's growing ellipse, seed 1: the finest grain
+    /// 16–64 px inside 0.036–0.038 on the first frame, 0.025–0.026 by frame 24, the swatch's
+    /// 0.036–0.045; with the gain 0.033–0.036; contrast 0.782 → 0.870 of the swatch's). The gain
+    /// only raises the grain, at most 2×: lowering it where the vote left more than the exemplar
+    /// has took ink-rims' ellipses' contrast from 1.04 to 0.92. The border band, matched again
+    /// every frame against the rim's own paint, did not fade, and raising a thin part's grain
+    /// only made it change more (yellow-granules' limb 1.134 → 1.216 of the exemplar's
+    /// incoherent change); it keeps its grain. Not in the paper. Off = the grain as voted.
+    /// Default: on.
+    pub fn grain_match(mut self, on: bool) -> Self {
+        self.p.parts.grain_match = on;
         self
     }
 

@@ -138,13 +138,25 @@ fn level(f: &FrameInputs, l: usize, coarse: Option<Nnf>, st: &mut StageTimes, ou
             // The grain is kept as a density (a factor of the low-pass): where the tone match
             // darkens the low-pass, its grain darkens in proportion, and a dark pixel's grain
             // cannot take it below black.
+            // Its amplitude is then brought to the exemplar's at each depth (`tone::grain_gains`):
+            // a density scaled by g is the factor raised to the power g.
             let before = low.clone();
             tone::match_tone(&mut low, &field, &gl.mask, &gl.dist, &src.tone, src.paper);
+            let gains = match &src.grain_tone {
+                Some(prof) if p.parts.grain_match => {
+                    tone::grain_gains(&before, &full, &field, &gl.mask, &gl.dist, prof)
+                }
+                _ => Vec::new(),
+            };
             low.iter()
                 .zip(&before)
                 .zip(full)
-                .map(|((l, b), f)| {
-                    std::array::from_fn(|k| if b[k] > 1e-4 { (l[k] * f[k] / b[k]).clamp(0.0, 1.0) } else { f[k] })
+                .enumerate()
+                .map(|(q, ((l, b), f))| {
+                    let g = if gains.is_empty() { [1.0; 3] } else { tone::grain_gain_at(&gains, gl.dist.data()[q]) };
+                    std::array::from_fn(|k| {
+                        if b[k] > 1e-4 { (l[k] * (f[k] / b[k]).powf(g[k])).clamp(0.0, 1.0) } else { f[k] }
+                    })
                 })
                 .collect()
         });

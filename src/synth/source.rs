@@ -487,6 +487,8 @@ pub struct SourcePyramid {
     pub(crate) size: (usize, usize),
     /// The exemplar's pigment density per frame and depth ([`super::tone`]).
     pub(crate) tone: super::tone::ToneProfile,
+    /// The exemplar's grain amplitude per frame and depth, with the grain kept ([`super::tone::grain_gains`]).
+    pub(crate) grain_tone: Option<super::tone::GrainProfile>,
 }
 
 impl SourcePyramid {
@@ -558,6 +560,10 @@ impl SourcePyramid {
             size: frames[0].size(),
             // With the grain kept, the output's low-pass is matched, before its grain is added back.
             tone: super::tone::ToneProfile::new(if params.parts.keep_grain { &low } else { frames }, guides, paper),
+            grain_tone: params
+                .parts
+                .keep_grain
+                .then(|| super::tone::GrainProfile::new(frames, &low, guides, paper, border_width)),
         }
     }
 }

@@ -144,6 +144,127 @@ impl PassProfile {
     }
 }
 
+/// The largest factor by which [`grain_gains`] raises or lowers the grain's amplitude.
+const MAX_GRAIN_GAIN: f64 = 2.0;
+
+/// The exemplar's grain amplitude per frame and depth bin, for [`grain_gains`]: the mean
+/// square, per channel, of the grain's density `D(c) − D(l)` (`l` the frame's low-pass,
+/// [`super::source::segment_low_pass`]) over the bin's pixels. A bin with fewer than
+/// [`MIN_EXEMPLAR`] pixels takes the nearest shallower bin's value (`None` while there is none).
+pub(crate) struct GrainProfile {
+    ms: Vec<[Option<[f64; 3]>; DEPTHS]>,
+    /// The paper color the densities are measured over.
+    paper: Rgb,
+    /// The border width b: the depths whose grain [`grain_gains`] leaves as it is.
+    band: f32,
+}
+
+impl GrainProfile {
+    /// The profile of the exemplar frames `frames` with their low-pass `lows` and guides, over
+    /// the paper color `paper`, for a border width `band`.
+    pub(crate) fn new(
+        frames: &[Plane<Rgb>],
+        lows: &[Plane<Rgb>],
+        guides: &[FrameGuides],
+        paper: Rgb,
+        band: f32,
+    ) -> GrainProfile {
+        let ms = frames
+            .par_iter()
+            .zip(lows)
+            .zip(guides)
+            .map(|((f, l), g)| {
+                let (mut sq, mut n) = ([[0.0f64; 3]; DEPTHS], [0usize; DEPTHS]);
+                for (q, (&m, &d)) in g.mask.data().iter().zip(g.dist.data()).enumerate() {
+                    if m {
+                        let (df, dl) = (density(f.data()[q], paper), density(l.data()[q], paper));
+                        let b = bin(d);
+                        (0..3).for_each(|k| sq[b][k] += ((df[k] - dl[k]) as f64).powi(2));
+                        n[b] += 1;
+                    }
+                }
+                let mut out = [None; DEPTHS];
+                let mut last = None;
+                for b in 0..DEPTHS {
+                    if n[b] >= MIN_EXEMPLAR {
+                        last = Some(sq[b].map(|v| v / n[b] as f64));
+                    }
+                    out[b] = last;
+                }
+                out
+            })
+            .collect();
+        GrainProfile { ms, paper, band }
+    }
+}
+
+/// The gain per depth bin and channel that gives the output's grain the exemplar's amplitude
+/// at that depth, in the frames its matches come from ([`super::ParamsBuilder::grain_match`]):
+/// `√(want / have)`, bounded to `[1/`[`MAX_GRAIN_GAIN`]`, `[`MAX_GRAIN_GAIN`]`]`, where `have`
+/// is the mean square of the output's grain density `D(full) − D(low)` over the bin's matched
+/// pixels and `want` the exemplar's ([`GrainProfile`]) weighted by the matches' frames. Bins
+/// with fewer than [`MIN_OUTPUT`] matched pixels, and the border band (depths within the
+/// profile's border width b), keep their grain (gain 1).
+///
+/// The tone match gives the low-pass the exemplar's tones and detail at each depth; the grain,
+/// voted apart, kept what the vote left of it. Paint that is carried from frame to frame sits
+/// between the exemplar's pixels and its voters agree less as the field is stretched, and its
+/// grain faded: on a growing ellipse painted with the still swatch the finest grain
+/// (`σ = 1` high-pass of the density) 16–64 px inside fell from 0.036–0.038 on the first frame
+/// to 0.025–0.026 by frame 24, against the exemplar's 0.036–0.045. The border band's did not
+/// fade (0.040 → 0.039, the exemplar's 0.035): there the carried paint is matched again every
+/// frame against the rim's own, and a thin part is all band; raising its grain only made the
+/// limbs' paint change more between frames (yellow-granules' swinging limb, seed 1: incoherent
+/// change 1.134 → 1.216 of the exemplar's).
+pub(crate) fn grain_gains(
+    low: &[Rgb],
+    full: &[Rgb],
+    field: &Nnf,
+    mask: &Mask,
+    dist: &Plane<f32>,
+    prof: &GrainProfile,
+) -> Vec<[f32; 3]> {
+    let (frames, paper, band) = (prof.ms.len(), prof.paper, prof.band);
+    let mut have = vec![[0.0f64; 3]; DEPTHS];
+    let mut n = vec![0usize; DEPTHS];
+    let mut want = vec![[0.0f64; 3]; DEPTHS];
+    let mut wn = vec![0usize; DEPTHS];
+    for (q, m) in field.data.iter().enumerate() {
+        let (x, y) = (q % field.w, q / field.w);
+        if !m.ok || !mask.get(x, y) || (m.i as usize) >= frames {
+            continue;
+        }
+        let b = bin(dist.get(x, y));
+        let (df, dl) = (density(full[q], paper), density(low[q], paper));
+        (0..3).for_each(|k| have[b][k] += ((df[k] - dl[k]) as f64).powi(2));
+        n[b] += 1;
+        if let Some(ms) = prof.ms[m.i as usize][b] {
+            (0..3).for_each(|k| want[b][k] += ms[k]);
+            wn[b] += 1;
+        }
+    }
+    (0..DEPTHS)
+        .map(|b| {
+            if n[b] < MIN_OUTPUT || wn[b] == 0 || (b as f32 + 0.5) <= band {
+                return [1.0; 3];
+            }
+            std::array::from_fn(|k| {
+                let (h, w) = (have[b][k] / n[b] as f64, want[b][k] / wn[b] as f64);
+                if h > 1e-12 && w > 0.0 { (w / h).sqrt().clamp(1.0, MAX_GRAIN_GAIN) as f32 } else { 1.0 }
+            })
+        })
+        .collect()
+}
+
+/// The gain of [`grain_gains`] at distance `d` from the edge, per channel: linear between the
+/// bin centers.
+pub(crate) fn grain_gain_at(gains: &[[f32; 3]], d: f32) -> [f32; 3] {
+    let t = (d.max(0.0) - 0.5).clamp(0.0, (DEPTHS - 1) as f32);
+    let (b0, f) = (t as usize, t.fract());
+    let b1 = (b0 + 1).min(DEPTHS - 1);
+    std::array::from_fn(|k| gains[b0][k] * (1.0 - f) + gains[b1][k] * f)
+}
+
 /// The densities of the pixels `c` (rows of `w`) inside `mask`, over the paper color `paper`
 /// (zero outside `mask`): computed once per pass, for the coarse band, the histograms and the
 /// map.
@@ -724,5 +845,37 @@ mod tests {
         assert_eq!(rgb[24 * 48 + 24], [1.0; 3], "paper has no pigment to scale");
         let darker = rgb.iter().zip(&before).filter(|(a, b)| a[0] < b[0] - 1e-3).count();
         assert!(darker > 200, "the pale paint darkened ({darker} pixels)");
+    }
+
+    /// The grain's gain (`grain_gains`): the exemplar's own frame keeps its grain (gain 1 at
+    /// every depth); the same frame with its grain's density halved gets it doubled back (the
+    /// bound, 2); with its grain doubled it is left as it is — the gain only gives back what
+    /// the vote took; and the border band keeps its grain.
+    #[test]
+    fn faded_grain_gets_the_exemplars_amplitude_back() {
+        let (frames, guides) = disc_exemplar(64, 64, 4, 7);
+        let lows: Vec<Plane<Rgb>> = frames.iter().zip(&guides).map(|(f, g)| segment_low_pass(f, &g.mask)).collect();
+        let prof = GrainProfile::new(&frames, &lows, &guides, [1.0; 3], 0.0);
+        let (g, full, low) = (&guides[2], frames[2].data(), lows[2].data());
+        let field = identity(64, 64, 2);
+        // The grain's density scaled by `s`: the factor full / low raised to the power s.
+        let scaled = |s: f32| -> Vec<Rgb> {
+            full.iter().zip(low).map(|(f, l)| std::array::from_fn(|k| l[k] * (f[k] / l[k].max(1e-6)).powf(s))).collect()
+        };
+        let inside = |gains: &[[f32; 3]]| -> Vec<f32> { (0..8).flat_map(|b| gains[b]).collect() };
+        let same = grain_gains(low, full, &field, &g.mask, &g.dist, &prof);
+        assert!(inside(&same).iter().all(|&v| (v - 1.0).abs() < 1e-3), "the exemplar's own grain: {same:?}");
+        let half = grain_gains(low, &scaled(0.5), &field, &g.mask, &g.dist, &prof);
+        assert!(inside(&half).iter().all(|&v| (v - 2.0).abs() < 1e-2), "half the grain: {half:?}");
+        let double = grain_gains(low, &scaled(2.0), &field, &g.mask, &g.dist, &prof);
+        assert!(inside(&double).iter().all(|&v| v == 1.0), "twice the grain: {double:?}");
+        // The border band keeps its grain: with b = 4 the half grain is doubled from 4 px in.
+        let banded = GrainProfile::new(&frames, &lows, &guides, [1.0; 3], 4.0);
+        let half = grain_gains(low, &scaled(0.5), &field, &g.mask, &g.dist, &banded);
+        assert!(half[..4].iter().flatten().all(|&v| v == 1.0), "the band: {half:?}");
+        assert!(half[4..8].iter().flatten().all(|&v| (v - 2.0).abs() < 1e-2), "inside the band: {half:?}");
+        // Linear between bin centers.
+        let g = grain_gain_at(&[[1.0; 3], [2.0; 3]], 1.0);
+        assert!((g[0] - 1.5).abs() < 1e-6);
     }
 }
