@@ -142,17 +142,19 @@ fn a_still_paints_moving_shapes_coherently() {
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
+/// The swatch alone on `target` (no identity), with the rest of the options as `more` sets
+/// them; the report is printed.
+fn swatch_on(target: TargetKind, more: impl FnOnce(SuiteOptions) -> SuiteOptions) -> SuiteReport {
+    let options = more(SuiteOptions::default().exemplars(["blue-swatch"]).targets([target]).identity(false));
+    let report = quality::run(&options, &NoProgress).unwrap();
+    println!("{report}");
+    report
+}
+
 /// The lowest of the long target's later windows ÷ its first (contrast) and the whole run's
 /// contrast ÷ the swatch's.
 fn long_contrast(params: fluidymation::synth::Params) -> (f32, f32) {
-    let options = SuiteOptions::default()
-        .exemplars(["blue-swatch"])
-        .targets([TargetKind::Long])
-        .identity(false)
-        .scale(0.5)
-        .params(params);
-    let report = quality::run(&options, &NoProgress).unwrap();
-    println!("{report}");
+    let report = swatch_on(TargetKind::Long, |o| o.scale(0.5).params(params));
     let row = &report.rows[0];
     assert_eq!((row.frames, row.windows.len()), (300, 6));
     let lowest = row.windows[1..].iter().map(|w| w.contrast_vs_first.unwrap_or(0.0)).fold(f32::INFINITY, f32::min);
@@ -218,19 +220,13 @@ fn a_still_keeps_its_texture_on_a_long_turning_shape() {
 /// interior grew calmer than the swatch.
 ///
 /// Measured (fourth session of 2026-12-07, printed; `quality -e blue-swatch --target growing
-/// --frames 24`): contrast 0.870 of the swatch's at the same depths, 0.782 without. Floors: the 0.85 (measured 0.870; the output is the
-/// same on every machine and thread count) and at least 0.05 above the run without (+0.088).
+/// --frames 24`): contrast 0.870 of the swatch's at the same depths, 0.782 without. Floors:
+/// the 0.85 (measured 0.870; the output is the same on every machine and thread count)
+/// and at least 0.05 above the run without (+0.088).
 #[test]
 fn a_still_s_growing_shape_keeps_its_grain() {
     let growing = |params: fluidymation::synth::Params| {
-        let options = SuiteOptions::default()
-            .exemplars(["blue-swatch"])
-            .targets([TargetKind::Growing])
-            .identity(false)
-            .frames(24)
-            .params(params);
-        let report = quality::run(&options, &NoProgress).unwrap();
-        println!("{report}");
+        let report = swatch_on(TargetKind::Growing, |o| o.frames(24).params(params));
         report.rows[0].summary.contrast_ratio.unwrap_or(0.0)
     };
     let on = growing(fluidymation::synth::Params::default());
