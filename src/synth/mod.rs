@@ -621,6 +621,7 @@ fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevS
     let active: Vec<bool> = source::dilate(&g.mask, HALF).into_vec();
     let change = shift::AreaChange::of(g.mask.data(), &prev.masks[0]);
     let moves = change.moves_rather_than_grows();
+    let travel_hold = p.parts.travel_hold && p.parts.full_carry && p.parts.advect && change.travels();
     let inputs = shift::ShiftInputs {
         carry_new: moves,
         src: &src.levels[0],
@@ -640,8 +641,9 @@ fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevS
         hold_time,
         max_step: if moves && p.parts.pace && p.parts.advect { 1 } else { usize::MAX },
         full_carry: moves && p.parts.full_carry,
-        travel_hold: p.parts.travel_hold && p.parts.full_carry && p.parts.advect && change.travels(),
-        moving: shift::all_rim(g.dist.data(), src.border_width) && shift::moves_noticeably(&prev.flow),
+        travel_hold,
+        // Read only where the shape travels.
+        moving: travel_hold && shift::all_rim(g.dist.data(), src.border_width) && shift::moves_noticeably(&prev.flow),
         turn: p.turns(src.levels[0].frames),
     };
     shift::shift_nnf(&inputs, &prev.nnf0)

@@ -142,18 +142,15 @@ fn level(f: &FrameInputs, l: usize, coarse: Option<Nnf>, st: &mut StageTimes, ou
             // a density scaled by g is the factor raised to the power g.
             let before = low.clone();
             tone::match_tone(&mut low, &field, &gl.mask, &gl.dist, &src.tone, src.paper);
-            let gains = match &src.grain_tone {
-                Some(prof) if p.parts.grain_match => {
-                    tone::grain_gains(&before, &full, &field, &gl.mask, &gl.dist, prof)
-                }
-                _ => Vec::new(),
-            };
+            let gains = (src.grain_tone.as_ref())
+                .filter(|_| p.parts.grain_match)
+                .map(|prof| tone::grain_gains(&before, &full, &field, &gl.mask, &gl.dist, prof));
             low.iter()
                 .zip(&before)
                 .zip(full)
                 .enumerate()
                 .map(|(q, ((l, b), f))| {
-                    let g = if gains.is_empty() { [1.0; 3] } else { tone::grain_gain_at(&gains, gl.dist.data()[q]) };
+                    let g = gains.as_ref().map_or([1.0; 3], |gains| tone::grain_gain_at(gains, gl.dist.data()[q]));
                     std::array::from_fn(|k| {
                         if b[k] > 1e-4 { (l[k] * (f[k] / b[k]).powf(g[k])).clamp(0.0, 1.0) } else { f[k] }
                     })

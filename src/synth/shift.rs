@@ -82,8 +82,8 @@ const HOLD_QUANTILE: f32 = 0.9;
 /// Whether the shape moves noticeably from the previous frame: the 90th percentile of the
 /// speed of its pixels (`flow_prev`, zero where it had no paint) reaches [`HOLD_SPEED`].
 ///
-/// Decided for a thin part ([`all_rim`]) as well as per pixel ([`holds`]): a swinging limb's paint near its
-/// shoulder, and all of it for the few frames at the turn of each swing, moves less than half
+/// Decided for a thin part ([`all_rim`]) as well as per pixel ([`holds`]): a swinging limb's
+/// paint near its shoulder, and all of it for the few frames at the turn of each swing, moves less than half
 /// a pixel a frame while the limb travels on. Read per pixel only, that paint aged there — one
 /// exemplar frame a frame, in place — and boiled (measured on the suite's limb with
 /// yellow-granules, seed 1, `synth` and `eval`: incoherent change 1.62 and 1.66 of the
@@ -206,8 +206,8 @@ fn step_of(inp: &ShiftInputs, m: &Match, q: usize, dt: f32, c: f32) -> Option<(u
 /// Whether the paint carried to target pixel `q` from pixel `from` of the previous frame holds
 /// its exemplar frame ([`super::ParamsBuilder::travel_hold`]): the shape travels
 /// ([`ShiftInputs::travel_hold`]), the paint lands in the border band (within b of the edge),
-/// and either the shape is a thin part that moves noticeably ([`ShiftInputs::moving`]) or the paint itself moves
-/// at least [`HOLD_SPEED`] (the previous frame's flow where it was: a fast part of a shape
+/// and either the shape is a thin part that moves noticeably ([`ShiftInputs::moving`]) or the
+/// paint itself moves at least [`HOLD_SPEED`] (the previous frame's flow where it was: a fast part of a shape
 /// that mostly rests).
 fn holds(inp: &ShiftInputs, from: usize, q: usize) -> bool {
     inp.travel_hold && inp.dist_cur[q] <= inp.band && (inp.moving || inp.flow_prev[from].length() >= HOLD_SPEED)

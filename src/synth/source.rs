@@ -487,7 +487,8 @@ pub struct SourcePyramid {
     pub(crate) size: (usize, usize),
     /// The exemplar's pigment density per frame and depth ([`super::tone`]).
     pub(crate) tone: super::tone::ToneProfile,
-    /// The exemplar's grain amplitude per frame and depth, with the grain kept ([`super::tone::grain_gains`]).
+    /// The exemplar's grain amplitude per frame and depth, with the grain kept
+    /// ([`super::tone::grain_gains`]).
     pub(crate) grain_tone: Option<super::tone::GrainProfile>,
 }
 

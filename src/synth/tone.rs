@@ -144,7 +144,7 @@ impl PassProfile {
     }
 }
 
-/// The largest factor by which [`grain_gains`] raises or lowers the grain's amplitude.
+/// The largest factor by which [`grain_gains`] raises the grain's amplitude.
 const MAX_GRAIN_GAIN: f64 = 2.0;
 
 /// The exemplar's grain amplitude per frame and depth bin, for [`grain_gains`]: the mean
@@ -200,7 +200,7 @@ impl GrainProfile {
 
 /// The gain per depth bin and channel that gives the output's grain the exemplar's amplitude
 /// at that depth, in the frames its matches come from ([`super::ParamsBuilder::grain_match`]):
-/// `√(want / have)`, bounded to `[1/`[`MAX_GRAIN_GAIN`]`, `[`MAX_GRAIN_GAIN`]`]`, where `have`
+/// `√(want / have)`, bounded to `[1, `[`MAX_GRAIN_GAIN`]`]` (it only gives back), where `have`
 /// is the mean square of the output's grain density `D(full) − D(low)` over the bin's matched
 /// pixels and `want` the exemplar's ([`GrainProfile`]) weighted by the matches' frames. Bins
 /// with fewer than [`MIN_OUTPUT`] matched pixels, and the border band (depths within the
@@ -259,10 +259,17 @@ pub(crate) fn grain_gains(
 /// The gain of [`grain_gains`] at distance `d` from the edge, per channel: linear between the
 /// bin centers.
 pub(crate) fn grain_gain_at(gains: &[[f32; 3]], d: f32) -> [f32; 3] {
-    let t = (d.max(0.0) - 0.5).clamp(0.0, (DEPTHS - 1) as f32);
-    let (b0, f) = (t as usize, t.fract());
-    let b1 = (b0 + 1).min(DEPTHS - 1);
+    let (b0, b1, f) = between_bins(d);
     std::array::from_fn(|k| gains[b0][k] * (1.0 - f) + gains[b1][k] * f)
+}
+
+/// The two depth bins whose centers (`b + 0.5`) a pixel `d` from the edge lies between, and
+/// its share `f` of the deeper one: values per bin are interpolated as `(1 − f)·v[b0] + f·v[b1]`.
+#[inline]
+fn between_bins(d: f32) -> (usize, usize, f32) {
+    let t = (d.max(0.0) - 0.5).clamp(0.0, (DEPTHS - 1) as f32);
+    let b0 = t as usize;
+    (b0, (b0 + 1).min(DEPTHS - 1), t.fract())
 }
 
 /// The densities of the pixels `c` (rows of `w`) inside `mask`, over the paper color `paper`
@@ -543,10 +550,7 @@ fn match_pass(rgb: &mut [Rgb], field: &Nnf, mask: &Mask, dist: &Plane<f32>, prof
             if !mask.get(x, y) {
                 continue;
             }
-            // Linear between the bin centers (b + 0.5).
-            let t = (dist.get(x, y).max(0.0) - 0.5).clamp(0.0, (DEPTHS - 1) as f32);
-            let (b0, f) = (t as usize, t.fract());
-            let b1 = (b0 + 1).min(DEPTHS - 1);
+            let (b0, b1, f) = between_bins(dist.get(x, y));
             let d = dens[y * w + x];
             let (cq, dq) = bands_at(d, coarse.as_deref(), y * w + x);
             *c = std::array::from_fn(|k| {
