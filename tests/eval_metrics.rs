@@ -368,8 +368,8 @@ fn plot_draws_every_series() {
     let svg = eval::plot::plot_svg(&r, &opts);
     assert_eq!(
         svg.matches("<polyline").count(),
-        10,
-        "IoU, contrast, rim, 3 palette channels, patches, temporal, incoherent, motion"
+        11,
+        "IoU and the exemplar's reachable IoU, contrast, rim, 3 palette channels, patches, temporal, incoherent, motion"
     );
     // Pixels of the coverage line's color (#1f77b4) are drawn.
     let blue = img

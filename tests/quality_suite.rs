@@ -97,6 +97,9 @@ fn stand_ins_score_what_they_are() {
     assert!((at_depths - 1.0).abs() < 1e-3, "its own depths: {at_depths}");
     assert_eq!(id.coverage_alpha, Some(1.0));
     assert!(id.summary.coverage_iou.unwrap() > 0.95, "{:?}", id.summary.coverage_iou);
+    // What exemplar-like paint reaches on these masks is what the exemplar itself reaches.
+    let (got, reachable) = (id.summary.coverage_iou.unwrap(), id.summary.coverage_iou_exemplar.unwrap());
+    assert!((got - reachable).abs() < 0.005, "{got} vs {reachable}");
     assert!(id.exemplar_summary.edge_darkening.unwrap() > 0.05, "ink-rims has dark rims");
 
     // A flat fill: no texture, no rim, no change; exact coverage.

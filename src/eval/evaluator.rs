@@ -3,7 +3,7 @@
 
 use super::coherence::{incoherent_change_binned, pair_residual};
 use super::contrast::local_contrast_binned;
-use super::coverage::coverage_from_counts;
+use super::coverage::{COVER_BINS, PaintedProfile, coverage_from_counts, mask_bins};
 use super::depth::{DEPTH_BINS, DepthProfile, depth_bin, region_bins};
 use super::flow::{motion_pair_mean, motion_pair_mean_with};
 use super::patches::frame_patch_mean;
@@ -51,6 +51,9 @@ pub struct Reference {
     contrast: Option<f32>,
     hist: ColorHistogram,
     depth: DepthProfile,
+    /// How much of its masks its paint covers per depth (for the coverage an exemplar-like
+    /// output can reach).
+    painted: PaintedProfile,
 }
 
 impl Reference {
@@ -80,11 +83,13 @@ impl Reference {
         let depth = timed("exemplar depth profile", || DepthProfile::new(&frames, &shapes, &regions, &coherence_bins));
         let (contrast, hist) = depth.whole();
         let contrast = contrast.value();
+        let paper = exemplar.paper();
+        let painted = PaintedProfile::new(&frames, &shapes, paper, options.paint_threshold);
         Ok(Reference {
             name: exemplar.meta.name.clone(),
             step,
             scale,
-            paper: exemplar.paper(),
+            paper,
             frames,
             masks,
             regions,
@@ -95,6 +100,7 @@ impl Reference {
             coherence,
             hist,
             depth,
+            painted,
         })
     }
 
@@ -144,6 +150,8 @@ impl Reference {
 struct FrameTotals {
     /// Intersection and union of the painted area with the target mask.
     coverage: (u64, u64),
+    /// The target mask's pixels per depth ([`mask_bins`]).
+    mask_bins: Vec<u64>,
     /// The local contrast per depth bin, and the interior's pixels per depth bin.
     contrast_bins: Vec<Mean>,
     region_bins: Vec<u64>,
@@ -287,6 +295,7 @@ impl<'a> Evaluator<'a> {
                     local_contrast_binned(&rgb[i], &region, DEPTH_BINS, |x, y| depth_bin(shape.sdf.get(x, y)));
                 FrameTotals {
                     coverage: intersection_union(&painted_mask(&output[i], &self.painted), &shape.mask),
+                    mask_bins: mask_bins(shape),
                     region_bins: region_bins(shape, &region),
                     contrast_bins,
                     hist: ColorHistogram::of_region(&rgb[i], &region),
@@ -332,6 +341,7 @@ impl<'a> Evaluator<'a> {
         let mut hist = ColorHistogram::new();
         let mut contrast_bins = vec![Mean::default(); DEPTH_BINS];
         let mut counts = vec![0u64; DEPTH_BINS];
+        let mut mask_counts = vec![0u64; COVER_BINS];
         let mut coherence_counts = vec![0u64; DEPTH_BINS];
         for t in frames {
             hist.merge(&t.hist);
@@ -339,6 +349,9 @@ impl<'a> Evaluator<'a> {
                 contrast_bins[k] = contrast_bins[k].merged(t.contrast_bins[k]);
                 counts[k] += t.region_bins[k];
                 coherence_counts[k] += t.coherence_bins[k];
+            }
+            for (a, b) in mask_counts.iter_mut().zip(&t.mask_bins) {
+                *a += b;
             }
         }
         let coherence = Measure {
@@ -355,6 +368,7 @@ impl<'a> Evaluator<'a> {
             .map(|(k, t)| FrameStats {
                 frame: range.start + k + 1,
                 coverage_iou: coverage.per_frame[k],
+                coverage_iou_exemplar: r.painted.expected_iou(&t.mask_bins),
                 local_contrast: t.contrast().value(),
                 contrast_ratio: ratio(t.contrast().value(), r.depth.contrast(&t.contrast_bins)),
                 palette_distance: r.depth.palette(&t.hist, &t.region_bins),
@@ -371,6 +385,7 @@ impl<'a> Evaluator<'a> {
             .collect();
         let summary = Summary {
             coverage_iou: coverage.value,
+            coverage_iou_exemplar: r.painted.expected_iou(&mask_counts),
             local_contrast: contrast.value,
             contrast_ratio: ratio(contrast.value, r.depth.contrast(&contrast_bins)),
             contrast_ratio_whole: ratio(contrast.value, r.contrast),

@@ -7,7 +7,7 @@
 //!
 //! | metric | function | reading |
 //! |---|---|---|
-//! | coverage | [`coverage_iou`] | IoU of the painted area with the target masks; 1 = exact |
+//! | coverage | [`coverage_iou`] | IoU of the painted area with the target masks; 1 = exact. Beside it, what paint like the exemplar's at each distance from the edge would reach ([`Summary::coverage_iou_exemplar`]): below 1 where the exemplar's edge fades into the paper, the more so on thin targets |
 //! | texture fidelity | [`patch_nn_distance`] | RMS distance of output 5×5 patches to their nearest exemplar patches; 0 = made of exemplar patches |
 //! | wash-out | [`local_contrast`] | mean 7×7 luma standard deviation of the interior; output / exemplar at the same depths ≈ 1, a flat fill scores 0 |
 //! | edge darkening | [`edge_darkening`] | mean luma of the interior (> 12 px inside) minus that of the band ≤ 4 px inside the edge; output / exemplar ≈ 1 has the exemplar's dark rim, ≈ 0 none, < 0 a pale edge |

@@ -89,8 +89,8 @@ pub fn plot_svg(report: &Report, options: &PlotOptions) -> String {
     let channel = |c: usize| frames.iter().map(|f| f.palette_distance.map(|p| p[c])).collect::<Vec<_>>();
     let panels = [
         Panel {
-            title: "coverage IoU",
-            lines: vec![("#1f77b4", series(|f| f.coverage_iou))],
+            title: "coverage IoU (gray: what the exemplar's own paint reaches at these depths)",
+            lines: vec![("#7f7f7f", series(|f| f.coverage_iou_exemplar)), ("#1f77b4", series(|f| f.coverage_iou))],
             range: Some((0.0, 1.0)),
             min_top: 1.0,
             reference: None,
@@ -376,6 +376,7 @@ mod tests {
             painted: Painted::Alpha,
             summary: Summary {
                 coverage_iou: Some(1.0),
+                coverage_iou_exemplar: Some(0.98),
                 local_contrast: None,
                 contrast_ratio: None,
                 contrast_ratio_whole: None,
@@ -402,6 +403,7 @@ mod tests {
                 .map(|i| FrameStats {
                     frame: i + 1,
                     coverage_iou: Some(1.0),
+                    coverage_iou_exemplar: Some(0.98),
                     local_contrast: series(i),
                     contrast_ratio: series(i),
                     palette_distance: series(i).map(|v| [v, v / 2.0, v / 3.0]),

@@ -48,6 +48,13 @@ pub struct ExemplarSummary {
 pub struct Summary {
     /// IoU of the painted area with the target masks, `Σ|A∩B| / Σ|A∪B|`; 1 = exact.
     pub coverage_iou: Option<f32>,
+    /// The IoU an output painted like the exemplar at every distance from the edge would
+    /// reach on these masks (the exemplar's own painted fraction per half-pixel depth,
+    /// weighted by the masks' pixels there): below 1 where the exemplar's edge fades into the
+    /// paper, the more so the thinner the target. Color detection only (it is the exemplar's
+    /// paint that fades, not its alpha).
+    #[serde(default)]
+    pub coverage_iou_exemplar: Option<f32>,
     /// Mean local contrast (7×7 luma std) of the output interiors.
     pub local_contrast: Option<f32>,
     /// `local_contrast` / the exemplar's at the same depths (distance from the edge, see the
@@ -120,6 +127,10 @@ pub struct FrameStats {
     pub frame: usize,
     /// IoU of the painted area with the target mask.
     pub coverage_iou: Option<f32>,
+    /// The IoU exemplar-like paint would reach on this frame's mask (see
+    /// [`Summary::coverage_iou_exemplar`]).
+    #[serde(default)]
+    pub coverage_iou_exemplar: Option<f32>,
     /// Mean local contrast of the interior.
     pub local_contrast: Option<f32>,
     /// `local_contrast` / the exemplar's (whole-sequence) local contrast.
@@ -246,7 +257,14 @@ impl fmt::Display for Report {
             writeln!(f, "{name:<38} {out:>9} {ex:>9} {r:>7}   {note}")
         };
         row(f, "metric", "output".into(), "exemplar".into(), "ratio".into(), "reading")?;
-        row(f, "coverage IoU", num(s.coverage_iou), String::new(), String::new(), "1 = painted area is the target")?;
+        row(
+            f,
+            "coverage IoU",
+            num(s.coverage_iou),
+            num(s.coverage_iou_exemplar),
+            String::new(),
+            "1 = painted area is the target; exemplar: its paint's own at these depths",
+        )?;
         // The exemplar's contrast at the output's depths (what the ratio divides by); its whole
         // interior's is in the JSON (`contrast_ratio_whole`).
         let at_depths = match (s.local_contrast, s.contrast_ratio) {

@@ -11,9 +11,9 @@ fn num(v: Option<f32>, digits: usize) -> String {
     }
 }
 
-const HEADER: [&str; 12] = [
-    "exemplar", "target", "frames", "IoU", "IoU α", "contrast", "rim", "palette", "t.change", "incoh.", "incoh.d",
-    "motion",
+const HEADER: [&str; 13] = [
+    "exemplar", "target", "frames", "IoU", "IoU ex", "IoU α", "contrast", "rim", "palette", "t.change", "incoh.",
+    "incoh.d", "motion",
 ];
 
 fn line(f: &mut fmt::Formatter<'_>, cells: &[String], notes: &str) -> fmt::Result {
@@ -30,6 +30,7 @@ fn cells(exemplar: &str, target: &str, frames: usize, s: &Summary, alpha: Option
         target.to_string(),
         frames.to_string(),
         num(s.coverage_iou, 3),
+        num(s.coverage_iou_exemplar, 3),
         num(alpha, 3),
         num(s.contrast_ratio, 2),
         num(s.edge_darkening_ratio, 2),
@@ -72,7 +73,12 @@ impl fmt::Display for SuiteReport {
             "quality suite: targets {0}x{0} ({1} frames{long}), engine seed {2}, {3:.1} s",
             self.side, self.frames, self.seed, self.seconds
         )?;
-        writeln!(f, "coverage (IoU) {}; IoU α: of the engine's alpha", self.coverage)?;
+        writeln!(
+            f,
+            "coverage (IoU) {}; IoU ex: what paint like the exemplar's at each distance from the edge would reach (below 1 \
+             where its edge fades into the paper); IoU α: of the engine's alpha",
+            self.coverage
+        )?;
         writeln!(
             f,
             "contrast, rim (edge darkening), t.change (temporal change), incoh. (incoherent change): output / exemplar, \
