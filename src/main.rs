@@ -2,7 +2,7 @@
 
 mod cli;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use std::process::ExitCode;
 
 /// Stylize vector animations with the moving appearance of real paint.
@@ -51,8 +51,18 @@ enum Command {
     Exemplar(cli::exemplar::Args),
 }
 
+/// The command line with negative numbers taken as values everywhere (`--scale -1` is then
+/// refused by the option's own check, which says what is expected, instead of by the parser
+/// as an unknown flag with a hint that turns it into an input).
+fn command() -> clap::Command {
+    fn negatives(c: clap::Command) -> clap::Command {
+        c.allow_negative_numbers(true).mut_subcommands(negatives)
+    }
+    negatives(Cli::command())
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = Cli::from_arg_matches(&command().get_matches()).unwrap_or_else(|e| e.exit());
     cli::init_logging(cli.quiet, cli.verbose);
     let ctx = cli::Ctx { quiet: cli.quiet, verbose: cli.verbose };
     cli::exit_with_parent();

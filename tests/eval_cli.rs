@@ -115,7 +115,8 @@ fn opaque_frames_use_the_background() {
         let f = composited(&b.field(t), &b.mask(t), [1.0, 1.0, 1.0]);
         img::save_rgba(&s.path("out").join(format!("{:04}.png", t + 1)), &f).unwrap();
     }
-    let o = s.run(&["--json", "--background", "#ffffff"]);
+    // A name, as `render --background` takes it.
+    let o = s.run(&["--json", "--background", "white"]);
     let (out, err) = text(&o);
     assert!(o.status.success(), "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
@@ -137,7 +138,12 @@ fn clear_errors_and_exit_code_1() {
     let o = cmd.arg("eval").arg(s.path("out")).args(["--exemplar", "no-such-exemplar", "--masks"]).arg(s.path("masks"));
     fails_with(&o.output().unwrap(), &["no exemplar named 'no-such-exemplar'"]);
     // A bad option.
-    fails_with(&s.run(&["--background", "blue"]), &["--background 'blue' is not a #rrggbb color"]);
+    fails_with(&s.run(&["--background", "paper"]), &["--background 'paper': expected an opaque color, #rrggbb"]);
+    fails_with(&s.run(&["--background", "#ff000080"]), &["--background '#ff000080': expected an opaque color"]);
+    // A chart that cannot be written: said before the measuring.
+    std::fs::write(s.path("a-file"), b"").unwrap();
+    let chart = s.path("a-file/chart.png");
+    fails_with(&s.run(&["--plot", chart.to_str().unwrap()]), &["--plot: cannot write the chart there"]);
     fails_with(&s.run(&["--interior-margin=-1"]), &["--interior-margin"]);
     fails_with(
         &s.run(&["--rim-band", "5", "--rim-interior", "4"]),
@@ -155,4 +161,28 @@ fn clear_errors_and_exit_code_1() {
     img::save_gray(&s.path("masks/0003.png"), &Bloom { size: SIZE, frames: FRAMES }.mask(2)).unwrap();
     fails_with(&s.run(&[]), &["could not load exemplar", "exemplar.toml"]);
     assert!(Path::new(&s.path("out/0001.png")).exists());
+}
+
+#[test]
+fn masks_of_something_else_are_warned_about() {
+    let s = Scene::new("other-masks");
+    // The masks moved far off the paint: the measures would read paper.
+    let b = Bloom { size: SIZE, frames: FRAMES };
+    for t in 0..FRAMES {
+        let m = b.mask(t);
+        let off =
+            fluidymation::img::Plane::from_fn(SIZE, SIZE, |x, y| m.get((x + SIZE / 2) % SIZE, (y + SIZE / 2) % SIZE));
+        img::save_gray(&s.path("masks").join(format!("{:04}.png", t + 1)), &off).unwrap();
+    }
+    let o = s.run(&[]);
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("hardly lies inside the masks of") && err.contains("are these the masks of this output?"),
+        "{err}"
+    );
+    assert!(!out.contains("NaN"), "{out}");
+    // The right masks: no warning.
+    let ok = Scene::new("own-masks").run(&[]);
+    assert!(!text(&ok).1.contains("hardly lies inside"), "{}", text(&ok).1);
 }

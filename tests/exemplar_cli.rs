@@ -66,3 +66,23 @@ fn list_show_generate_import() {
     assert!(code == 0 && out.contains("imported"), "{out}");
     std::fs::remove_dir_all(&home).unwrap();
 }
+
+#[test]
+fn a_name_that_hides_a_bundled_exemplar_is_warned_about() {
+    let home = std::env::temp_dir().join(format!("fm-cli-shadow-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&home);
+    std::fs::create_dir_all(&home).unwrap();
+    let painted = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/demo/painted-0024.png");
+    let (code, _, err) = run(&["exemplar", "import", painted, "--name", "blue-bloom"], &home);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("'blue-bloom' is also the name of a bundled exemplar") && err.contains("and the default style"),
+        "{err}"
+    );
+    let (_, out, _) = run(&["exemplar", "list"], &home);
+    assert!(out.contains("[hidden by an earlier one]"), "{out}");
+    let (code, _, err) = run(&["exemplar", "import", painted, "--name", "my-swatch"], &home);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("bundled exemplar"), "{err}");
+    let _ = std::fs::remove_dir_all(&home);
+}

@@ -94,3 +94,51 @@ fn limits_are_errors_before_any_work() {
     assert!(stderr(&o).contains("canvas width at --scale 10 is 20000 but at most 16384"), "{}", stderr(&o));
     let _ = std::fs::remove_dir_all(Path::new(&tmp));
 }
+
+#[test]
+fn negative_and_huge_numbers_are_named_not_taken_for_flags() {
+    let demo = root().join("fixtures/demo/waving.json");
+    let demo = demo.to_str().unwrap();
+    let out = scratch("negative");
+    let out = out.to_str().unwrap();
+    // Each refused with the option's own message (before: "unexpected argument '-1'" and a tip
+    // that turned the number into a second input).
+    for (args, says) in [
+        (&["--scale", "-1"][..], "--scale -1: expected a number in (0, 16]"),
+        (&["--seed", "-1"], "expected a whole number from 0 to 18446744073709551615"),
+        (&["--frames", "-3..2"], "--frames '-3..2': frames are numbered from 1"),
+        (&["--frames", "1..99999999999999999999"], "frame number 99999999999999999999 is too large"),
+    ] {
+        let o = run(&[&["render", demo, "-o", out][..], args].concat());
+        assert!(matches!(o.status.code(), Some(1 | 2)), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(says), "{args:?}: {}", stderr(&o));
+        assert!(!stderr(&o).contains("-- -"), "{args:?}: no tip to pass it after --");
+    }
+    assert!(!Path::new(out).join("0001.png").exists());
+}
+
+#[test]
+fn results_that_cannot_be_written_fail_before_the_work() {
+    let tmp = scratch("unwritable");
+    let file = tmp.join("a-file");
+    std::fs::write(&file, b"not a folder").unwrap();
+    let under = file.join("report.json");
+    // The quality suite would paint first and fail at the end (it can take an hour).
+    let o = run(&["quality", "-e", "ink-rims", "--target", "still", "--json", under.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--json: cannot write the report there"), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).is_empty(), "nothing was run");
+    let o = run(&["quality", "-e", "ink-rims", "--target", "still", "-o", file.to_str().unwrap()]);
+    assert!(stderr(&o).contains("exists and is not a directory"), "{}", stderr(&o));
+    let painted = root().join("fixtures/demo/painted-0024.png");
+    let o = run(&["exemplar", "import", painted.to_str().unwrap(), "--name", "x", "-o", file.to_str().unwrap()]);
+    assert!(stderr(&o).contains("-o: cannot create the exemplar folder there"), "{}", stderr(&o));
+    // An exemplar folder without its masks says what an exemplar folder holds.
+    let ex = tmp.join("no-masks");
+    std::fs::create_dir_all(ex.join("frames")).unwrap();
+    std::fs::copy(root().join("exemplars/ink-rims/exemplar.toml"), ex.join("exemplar.toml")).unwrap();
+    std::fs::copy(root().join("exemplars/ink-rims/frames/0001.png"), ex.join("frames/0001.png")).unwrap();
+    let o = run(&["exemplar", "show", ex.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("has no masks/ folder; an exemplar folder holds exemplar.toml"), "{}", stderr(&o));
+}

@@ -66,7 +66,7 @@ pub struct GenerateArgs {
     #[arg(long, default_value = "blue", value_parser = parse_pigment)]
     pub pigment: Pigment,
     /// Seed of every random choice (same seed, same exemplar).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = super::params::parse_seed)]
     pub seed: u64,
     /// Number of frames.
     #[arg(long, default_value_t = 30)]
@@ -206,18 +206,29 @@ fn list(search: &SearchPath) -> anyhow::Result<()> {
         outln!("no exemplars found");
         return Ok(());
     }
-    let width = all.iter().map(|i| i.name.len()).max().unwrap_or(4).max(4);
-    outln!("{:width$}  {:>9}  {:>6}  {:>6}  {:40}  WHERE", "NAME", "SIZE", "FRAMES", "BORDER", "DESCRIPTION");
+    let width = all.iter().map(|i| i.name.chars().count()).max().unwrap_or(4).max(4);
+    // The descriptions' column as wide as the longest (up to 72 characters; a longer one is
+    // cut with an ellipsis), so that WHERE stays one column.
+    const MAX_DESCRIPTION: usize = 72;
+    let cut = |d: &str| -> String {
+        if d.chars().count() <= MAX_DESCRIPTION {
+            d.to_string()
+        } else {
+            d.chars().take(MAX_DESCRIPTION - 1).chain(std::iter::once('…')).collect()
+        }
+    };
+    let dwidth = all.iter().map(|i| cut(&i.description).chars().count()).max().unwrap_or(0).max(11);
+    outln!("{:width$}  {:>9}  {:>6}  {:>6}  {:dwidth$}  WHERE", "NAME", "SIZE", "FRAMES", "BORDER", "DESCRIPTION");
     for i in all {
         let size = format!("{}x{}", i.size.0, i.size.1);
         let hidden = if i.shadowed { " [hidden by an earlier one]" } else { "" };
         outln!(
-            "{:width$}  {:>9}  {:>6}  {:>6.1}  {:40}  {}{}",
+            "{:width$}  {:>9}  {:>6}  {:>6.1}  {:dwidth$}  {}{}",
             i.name,
             size,
             i.frames,
             i.border_width,
-            i.description,
+            cut(&i.description),
             i.location,
             hidden
         );
@@ -284,9 +295,19 @@ fn target_dir(output: Option<PathBuf>, name: &str, force: bool, search: &SearchP
             .map(Path::to_path_buf)
             .context("no user exemplar folder (HOME is not set); pass -o DIR")?,
     };
+    fluidymation::output::prepare_dir(&parent).context("-o: cannot create the exemplar folder there")?;
     let dir = parent.join(name);
     if dir.exists() && !force {
         bail!("'{}' already exists; pass --force to replace it or choose another --name", dir.display());
+    }
+    if exemplar::list(&SearchPath::new().with_bundled(true)).iter().any(|b| b.name == name) {
+        log::warn!(
+            "'{name}' is also the name of a bundled exemplar: wherever '{}' is searched (the user's exemplar \
+             folder always is, before the bundled set), '-e {name}'{} will paint with this one; choose another \
+             --name to keep both",
+            parent.display(),
+            if name == exemplar::DEFAULT { " and the default style" } else { "" }
+        );
     }
     Ok(dir)
 }

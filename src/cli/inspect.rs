@@ -32,7 +32,7 @@ pub struct Args {
     #[arg(long, value_name = "DIR")]
     pub guides: Option<PathBuf>,
     /// Only these frames, 1-based and inclusive: `A..B`, `A..`, `..B` or `N`.
-    #[arg(long, value_name = "A..B")]
+    #[arg(long, value_name = "A..B", allow_hyphen_values = true)]
     pub frames: Option<String>,
     /// Scale the canvas (0.5 = half size).
     #[arg(long, default_value_t = 1.0)]

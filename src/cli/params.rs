@@ -17,7 +17,7 @@ fn parse_list(name: &str, s: &str) -> Result<Vec<usize>> {
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct SynthFlags {
     /// Seed of every random choice (same seed + input = same output).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = parse_seed)]
     pub seed: u64,
     /// Weight of the border channel w_df (w^bound) [default: 5].
     #[arg(long, value_name = "W")]
@@ -333,6 +333,12 @@ impl SynthFlags {
     }
 }
 
+/// Parses a `--seed`: a whole number from 0 to 2⁶⁴ − 1, with a message that says so (the
+/// parser's own reads "invalid digit found in string" for `-1`).
+pub fn parse_seed(v: &str) -> std::result::Result<u64, String> {
+    v.trim().parse().map_err(|_| format!("expected a whole number from 0 to {}", u64::MAX))
+}
+
 /// Parses a 1-based inclusive frame range "A..B", "A..", "..B" or "N" into a 0-based range
 /// clipped to `0..total`.
 pub fn parse_frames(spec: Option<&str>, total: usize) -> Result<std::ops::Range<usize>> {
@@ -342,8 +348,21 @@ pub fn parse_frames(spec: Option<&str>, total: usize) -> Result<std::ops::Range<
         Some((a, b)) => (a.trim(), b.trim().trim_start_matches('=').trim()),
         None => (spec.trim(), spec.trim()),
     };
-    let a: usize = if a.is_empty() { 1 } else { a.parse().map_err(|_| bad())? };
-    let b: usize = if b.is_empty() { total.max(a) } else { b.parse().map_err(|_| bad())? };
+    // A frame number: a negative one is told it counts from 1, one too large to hold is
+    // named as such (both are numbers, so "expected A..B" would not say what is wrong).
+    let number = |v: &str| -> Result<usize> {
+        let digits = |t: &str| !t.is_empty() && t.bytes().all(|c| c.is_ascii_digit());
+        match v.parse() {
+            Ok(n) => Ok(n),
+            Err(_) if v.strip_prefix('-').is_some_and(digits) => {
+                bail!("--frames '{}': frames are numbered from 1 (1-based, inclusive), e.g. 1..24", spec)
+            }
+            Err(_) if digits(v) => bail!("--frames '{}': frame number {} is too large", spec, v),
+            Err(_) => Err(bad()),
+        }
+    };
+    let a: usize = if a.is_empty() { 1 } else { number(a)? };
+    let b: usize = if b.is_empty() { total.max(a) } else { number(b)? };
     if a == 0 {
         bail!("--frames '{}': frames are numbered from 1 (1-based, inclusive), e.g. 1..24", spec);
     }

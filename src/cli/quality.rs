@@ -87,6 +87,13 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
         options = options.sheets(dir);
     }
     options.validate()?;
+    // Where the results go is checked before the suite runs (it may take an hour).
+    if let Some(dir) = &args.output {
+        fluidymation::output::prepare_dir(dir).context("-o: cannot write the contact sheets and the table there")?;
+    }
+    if let Some(path) = &args.json {
+        fluidymation::output::prepare_file(path).context("--json: cannot write the report there")?;
+    }
     let bars = Bars::new(ctx.quiet);
     let report = quality::run(&options, &bars);
     bars.clear();

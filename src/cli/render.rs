@@ -42,7 +42,7 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 1.0)]
     pub scale: f32,
     /// Frames to render, 1-based inclusive: A..B, A.., ..B or N [default: all].
-    #[arg(long, value_name = "A..B")]
+    #[arg(long, value_name = "A..B", allow_hyphen_values = true)]
     pub frames: Option<String>,
     /// Also write every layer alone (RGBA) under OUT_DIR/layers/NN_name/.
     #[arg(long)]
@@ -599,8 +599,9 @@ fn summary_line(summary: &RenderSummary) -> String {
         (_, r) => format!(" (after {r} resumed)"),
     };
     format!(
-        "{} frames{} in {:.1} s ({:.2} s/frame) -> {}{}",
+        "{} frame{}{} in {:.1} s ({:.2} s/frame) -> {}{}",
         summary.frames,
+        if summary.frames == 1 { "" } else { "s" },
         resumed,
         summary.seconds,
         summary.seconds_per_frame(),

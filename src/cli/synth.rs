@@ -33,7 +33,7 @@ pub struct Args {
     #[arg(long, short = 'o')]
     pub output: PathBuf,
     /// Frames to synthesize, 1-based inclusive (e.g. 1..24). Guides still use every frame.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub frames: Option<String>,
     #[command(flatten)]
     pub threads: Threads,
@@ -127,8 +127,9 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
         // The whole command; per frame, the frames after the preparation.
         let secs = start.elapsed().as_secs_f64();
         eprintln!(
-            "{} frames in {:.1} s ({:.2} s/frame after {:.1} s of preparation) -> {}",
+            "{} frame{} in {:.1} s ({:.2} s/frame after {:.1} s of preparation) -> {}",
             written,
+            if written == 1 { "" } else { "s" },
             t0.elapsed().as_secs_f64(),
             secs / written as f64,
             (time.read + time.prepare).as_secs_f64(),

@@ -186,6 +186,7 @@ pub struct Report {
 
 fn num(v: Option<f32>) -> String {
     match v {
+        Some(v) if !v.is_finite() => "–".to_string(),
         Some(v) if v.abs() >= 100.0 => format!("{v:.1}"),
         Some(v) => format!("{v:.4}"),
         None => "–".to_string(),
@@ -325,7 +326,7 @@ impl fmt::Display for Report {
             f,
             "  at the output's depths",
             String::new(),
-            num(s.incoherent_change.zip(s.incoherent_change_ratio_depth).map(|(v, r)| v / r)),
+            num(s.incoherent_change.zip(s.incoherent_change_ratio_depth).filter(|&(_, r)| r > 0.0).map(|(v, r)| v / r)),
             num(s.incoherent_change_ratio_depth),
             "the exemplar's change at the same distances from the edge",
         )?;

@@ -232,6 +232,15 @@ impl Exemplar {
         let text = std::fs::read_to_string(&toml_path).map_err(|e| Error::io(&toml_path, e))?;
         let meta = parse_meta(&text, &toml_path)?;
         let read_all = |sub: &str, exts: &[&str]| -> Result<Vec<FileBytes>> {
+            if !dir.join(sub).is_dir() {
+                return Err(Error::exemplar(
+                    dir,
+                    format!(
+                        "has no {sub}/ folder; an exemplar folder holds exemplar.toml, frames/0001.png … (the \
+                         paint) and masks/0001.png … (white where there is paint, one per frame)"
+                    ),
+                ));
+            }
             let files = crate::seq::list_sequence(&dir.join(sub), exts)?;
             if files.len() > MAX_FRAMES {
                 return Err(Error::Limit {

@@ -95,6 +95,22 @@ pub fn prepare_dir(dir: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Checks, before any work is done, that the file `path` can be written later: it is not a
+/// folder, and its folder exists or can be created and is writable ([`prepare_dir`], which
+/// creates it).
+pub fn prepare_file(path: &Path) -> Result<()> {
+    if path.is_dir() {
+        return Err(Error::io(
+            path,
+            std::io::Error::new(std::io::ErrorKind::IsADirectory, "is a directory, not a file"),
+        ));
+    }
+    match path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        Some(dir) => prepare_dir(dir),
+        None => prepare_dir(Path::new(".")),
+    }
+}
+
 /// Removes the temporary files that an atomic write of a killed process left in `dir`
 /// (`.NAME.PID-SERIAL.tmp` for PNG, GIF and resume-state files, see [`img::atomic_write`]; only
 /// those of the file `only` when given), except those of processes still running. Returns

@@ -54,6 +54,9 @@ fn notes(r: &Row) -> String {
     if still && let Some(v) = r.summary.incoherent_change {
         n.push(format!("a still: incoherent change {v:.4} (no exemplar motion to compare with)"));
     }
+    if !still && r.summary.contrast_ratio.is_none() {
+        n.push("too thin at this size to measure its paint: no pixel lies deep enough inside for contrast, palette, rim or change".into());
+    }
     if r.fitted {
         let levels = r.max_levels.map(|l| format!(", at most {l} levels")).unwrap_or_default();
         n.push(format!("fitted to its thickness: σ {}, b {}{levels}", r.blur_sigma, r.border_width));
