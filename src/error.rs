@@ -28,7 +28,8 @@ pub enum Error {
         line: usize,
         /// 1-based column of the problem.
         column: usize,
-        /// What serde_json reported.
+        /// What serde_json reported (its message ends with the position; the error's text
+        /// then gives it only once).
         message: String,
         /// serde_json's own error ([`std::error::Error::source`]).
         source: Option<Box<dyn std::error::Error + Send + Sync>>,
@@ -193,7 +194,12 @@ impl fmt::Display for Error {
         match self {
             Error::Io { path, source } => write!(f, "'{}': {}", path.display(), source),
             Error::Json { path, line, column, message, .. } => {
-                write!(f, "'{}' is not valid JSON at line {}, column {}: {}", path.display(), line, column, message)
+                // serde_json's message already ends with the position: say it once.
+                if *line == 0 || message.ends_with(&format!(" at line {line} column {column}")) {
+                    write!(f, "'{}' is not valid JSON: {}", path.display(), message)
+                } else {
+                    write!(f, "'{}' is not valid JSON at line {}, column {}: {}", path.display(), line, column, message)
+                }
             }
             Error::Toml { path, message, .. } => write!(f, "'{}' is not valid TOML: {}", path.display(), message),
             Error::InvalidAnimation { path, message } => write!(f, "'{}': {}", path.display(), message),

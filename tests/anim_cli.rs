@@ -64,6 +64,8 @@ fn errors_exit_1_with_the_reason() {
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("error:") && err.contains("line 2"), "{err}");
+    // serde_json's message gives the position; it is said once, not repeated as a cause.
+    assert_eq!(err.matches("line 2").count(), 1, "{err}");
     let out = bin().args(["inspect", "--frames", "50..60"]).arg(demo()).output().unwrap();
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("only 48 frames"));

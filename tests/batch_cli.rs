@@ -91,6 +91,31 @@ fn a_batch_writes_each_file_apart_and_a_failure_does_not_stop_the_others() {
 }
 
 #[test]
+fn a_failed_file_says_its_reason_once_in_the_summary() {
+    // Nothing is rendered: a truncated file, and one whose only layer is text.
+    let tmp = Scratch::new("reasons");
+    let (truncated, text) = (tmp.join("truncated.json"), tmp.join("text.json"));
+    std::fs::write(&truncated, "{\"v\": \"5.7.0\",\n \"w\": 100,\n \"layers\": [").unwrap();
+    let title = r#"{"ty": 5, "nm": "title", "ind": 1, "ip": 0, "op": 10, "ks": {}}"#;
+    std::fs::write(&text, format!(r#"{{"fr": 10, "ip": 0, "op": 10, "w": 40, "h": 40, "layers": [{title}]}}"#))
+        .unwrap();
+    let out = tmp.join("out");
+    let o = run(&[os("render"), truncated.as_os_str(), text.as_os_str(), os("-o"), out.as_os_str()]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    let line = |name: &str| err.lines().find(|l| l.contains("FAILED") && l.contains(name)).unwrap_or_default();
+    let json = line("truncated.json");
+    assert!(json.ends_with("is not valid JSON: EOF while parsing a list at line 3 column 12"), "{err}");
+    assert_eq!(json.matches("line 3").count(), 1, "{err}");
+    assert!(
+        line("text.json").ends_with(
+            "no layer draws anything that could be stylized: layer 1 'title' (text): text layers are not supported"
+        ),
+        "{err}"
+    );
+}
+
+#[test]
 fn per_file_styles_in_one_styles_file() {
     let tmp = Scratch::new("styles");
     let styles = tmp.join("styles.toml");

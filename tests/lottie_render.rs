@@ -293,6 +293,152 @@ fn errors_name_the_problem() {
 }
 
 #[test]
+fn a_json_error_gives_its_position_once() {
+    let mut text = doc(vec![rect_layer("r", 1, 0.0, 0.0, 10.0, 10.0, [1.0; 4])]).to_string();
+    text.truncate(text.len() / 2);
+    let e = load_err(&text);
+    let Error::Json { line, column, .. } = &e else { panic!("{e}") };
+    let msg = e.to_string();
+    assert!(msg.contains("is not valid JSON: EOF while parsing"), "{msg}");
+    assert!(msg.ends_with(&format!(" at line {line} column {column}")), "{msg}");
+    assert_eq!(msg.matches("line").count(), 1, "{msg}");
+    // The source is serde_json's error, whose text the message ends with (the CLI's chain of
+    // causes leaves out a cause the message already said).
+    let source = std::error::Error::source(&e).unwrap().to_string();
+    assert!(msg.ends_with(&source), "{msg} / {source}");
+}
+
+/// A layer that draws nothing for the given reason: text, a null, a precomp of a missing asset.
+fn bare_layer(ty: Value, name: &str, ind: i64) -> Value {
+    json!({"ty": ty, "nm": name, "ind": ind, "ip": 0, "op": 10, "st": 0, "ks": {}})
+}
+
+fn load_message(d: &Value, opts: &LoadOptions) -> String {
+    let f = write_temp(&d.to_string());
+    let e = anim::load(f.path(), opts).unwrap_err();
+    assert!(matches!(e, Error::Empty { .. }), "{e}");
+    e.to_string()
+}
+
+#[test]
+fn a_file_with_nothing_to_stylize_says_why_layer_by_layer() {
+    let nothing = "no layer draws anything that could be stylized: ";
+    let opts = LoadOptions::default();
+    // The only layer is text, or a precomp whose asset does not exist: the error says so, as
+    // the warnings do when another layer draws.
+    let text = doc(vec![bare_layer(json!(5), "title", 1)]);
+    let msg = load_message(&text, &opts);
+    assert!(msg.ends_with(&format!("{nothing}layer 1 'title' (text): text layers are not supported")), "{msg}");
+    let mut missing = bare_layer(json!(0), "comp", 1);
+    missing["refId"] = json!("nope");
+    let msg = load_message(&doc(vec![missing.clone()]), &opts);
+    assert!(msg.ends_with(&format!("{nothing}layer 1 'comp' (precomp): precomp asset 'nope' does not exist")), "{msg}");
+    let rect = rect_layer("ok", 2, 0.0, 0.0, 10.0, 10.0, [1.0; 4]);
+    let a = anim_of(&doc(vec![missing, rect.clone()]), &opts);
+    assert!(
+        a.warnings.contains(&"layer 'comp': precomp asset 'nope' does not exist; nothing drawn".into()),
+        "{:?}",
+        a.warnings
+    );
+    let a = anim_of(&doc(vec![bare_layer(json!(5), "title", 1), rect]), &opts);
+    assert!(
+        a.warnings.contains(&"layer 'title': text layers are not supported; nothing drawn".into()),
+        "{:?}",
+        a.warnings
+    );
+
+    // Every kind of layer that is not a region, top-most first, each with its reason.
+    let mut matte = rect_layer("matte", 3, 0.0, 0.0, 10.0, 10.0, [1.0; 4]);
+    matte["td"] = json!(1);
+    let mut matted = bare_layer(json!(5), "label", 4);
+    matted["tt"] = json!(1);
+    let mut hidden = rect_layer("hidden", 5, 0.0, 0.0, 10.0, 10.0, [1.0; 4]);
+    hidden["hd"] = json!(true);
+    let mut ghost = rect_layer("ghost", 6, 0.0, 0.0, 10.0, 10.0, [1.0; 4]);
+    ghost["ks"] = json!({"o": st(json!(0))});
+    let mut paper = bare_layer(json!(1), "paper", 7);
+    paper["sc"] = json!("#ffffff");
+    (paper["sw"], paper["sh"]) = (json!(40), json!(40));
+    let all = doc(vec![
+        bare_layer(json!(13), "camera", 1),
+        bare_layer(json!(3), "ctrl", 2),
+        matte,
+        matted,
+        hidden,
+        ghost,
+        paper,
+    ]);
+    let msg = load_message(&all, &opts);
+    let expected = [
+        "layer 1 'camera' (type 13): layer type 13 is not supported",
+        "layer 2 'ctrl' (null): a null draws nothing (it only moves the layers parented to it)",
+        "layer 3 'matte' (shape): it is the track matte of layer 4 'label', not drawn itself",
+        "layer 4 'label' (text): text layers are not supported",
+        "layer 5 'hidden' (shape): it is hidden (hd)",
+        "layer 6 'ghost' (shape): its opacity is 0 throughout",
+        "layer 7 'paper' (solid): it is the background (an opaque solid covering the canvas), which is not stylized",
+    ];
+    assert!(msg.ends_with(&format!("{nothing}{}", expected.join("; "))), "{msg}");
+
+    // Many layers: the first eight are named, the rest counted.
+    let many = doc((1..=11).map(|i| bare_layer(json!(3), &format!("n{i}"), i)).collect());
+    let msg = load_message(&many, &opts);
+    assert!(msg.contains("; layer 8 'n8' (null): ") && !msg.contains("'n9'"), "{msg}");
+    assert!(msg.ends_with("; and 3 more layers"), "{msg}");
+
+    // Split precomps: the layers inside the precomp, each with its reason.
+    let d = json!({"v": "5.7.1", "fr": 10, "ip": 0, "op": 10, "w": 40, "h": 40,
+        "assets": [{"id": "c", "layers": [bare_layer(json!(5), "words", 1), bare_layer(json!(2), "photo", 2)]}],
+        "layers": [{"ty": 0, "nm": "pre", "ind": 1, "refId": "c", "ip": 0, "op": 10, "st": 0, "ks": {}}]});
+    let msg = load_message(&d, &LoadOptions::default().split_precomps(true));
+    assert!(
+        msg.ends_with(
+            "layer 1 'pre' (precomp): with --split-precomps each layer inside it is a region, and none draws \
+             anything (layer 1 'words' (text): text layers are not supported; layer 2 'photo' (image): image \
+             layers are not supported)"
+        ),
+        "{msg}"
+    );
+}
+
+#[test]
+fn an_unreadable_layer_type_is_named_by_its_json_path() {
+    let rect = rect_layer("ok", 9, 0.0, 0.0, 10.0, 10.0, [1.0; 4]);
+    let opts = LoadOptions::default();
+    let mut no_type = bare_layer(json!(0), "untyped", 3);
+    no_type.as_object_mut().unwrap().remove("ty");
+    let d = doc(vec![
+        bare_layer(json!("abc"), "weird", 1),
+        bare_layer(json!(4.5), "half", 2),
+        no_type,
+        bare_layer(json!(null), "null type", 4),
+        rect.clone(),
+    ]);
+    let a = anim_of(&d, &opts);
+    assert_eq!(a.regions.len(), 1);
+    for w in [
+        r#"layer 'weird': layers[0].ty is "abc", expected a number (the layer type); nothing drawn"#,
+        "layer 'half': layers[1].ty is 4.5, expected a whole number (the layer type); nothing drawn",
+        "layer 'untyped': layers[2].ty is missing, expected a number (the layer type); nothing drawn",
+        "layer 'null type': layers[3].ty is null, expected a number (the layer type); nothing drawn",
+    ] {
+        assert!(a.warnings.contains(&w.to_string()), "{w} in {:?}", a.warnings);
+    }
+    assert!(!a.warnings.iter().any(|w| w.contains("-1")), "{:?}", a.warnings);
+    // Inside a precomp asset, the path goes through `assets`.
+    let d = json!({"v": "5.7.1", "fr": 10, "ip": 0, "op": 10, "w": 40, "h": 40,
+        "assets": [{"id": "img", "w": 10, "h": 10, "p": "x.png"},
+                   {"id": "c", "layers": [rect.clone(), bare_layer(json!([4]), "boxed", 2)]}],
+        "layers": [{"ty": 0, "nm": "pre", "ind": 1, "refId": "c", "ip": 0, "op": 10, "st": 0, "ks": {}}]});
+    let w = &anim_of(&d, &opts).regions[0].warnings;
+    let expected = "layer 'boxed': assets[1].layers[1].ty is [4], expected a number (the layer type); nothing drawn";
+    assert!(w.contains(&expected.to_string()), "{w:?}");
+    // The only layer: the error quotes the same reason.
+    let msg = load_message(&doc(vec![bare_layer(json!("abc"), "weird", 1)]), &opts);
+    assert!(msg.ends_with(r#"layer 1 'weird': layers[0].ty is "abc", expected a number (the layer type)"#), "{msg}");
+}
+
+#[test]
 fn unsupported_features_warn_with_layer_name() {
     let mut l = rect_layer("fancy", 1, 0.0, 0.0, 10.0, 10.0, [1.0; 4]);
     l["ef"] = json!([{"ty": 5}]);

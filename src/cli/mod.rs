@@ -87,19 +87,35 @@ pub fn init_logging(quiet: bool, verbose: u8) {
     }
 }
 
-/// Prints `error: …` with its chain of causes; exit code 130 when cancelled, else 1.
-pub fn report_error(err: &anyhow::Error) -> ExitCode {
-    let mut stderr = std::io::stderr();
-    let _ = writeln!(stderr, "error: {}", err);
-    // Some errors print their source as part of their own message ("'out': Not a directory"):
-    // skip a cause that the line before already said.
-    let mut said = err.to_string();
+/// The texts of an error and its causes, without a cause that the text before it already
+/// said: some errors print their source as part of their own message ("'out': Not a
+/// directory", a JSON error ending with serde_json's message and position).
+fn chain_texts(err: &anyhow::Error) -> Vec<String> {
+    let mut texts = vec![err.to_string()];
+    let mut said = texts[0].clone();
     for cause in err.chain().skip(1) {
         let text = cause.to_string();
         if !said.ends_with(&text) {
-            let _ = writeln!(stderr, "  caused by: {}", text);
+            texts.push(text.clone());
         }
         said = text;
+    }
+    texts
+}
+
+/// An error and its causes on one line, `context: error: cause` like `{:#}`, without the
+/// repeats [`report_error`] leaves out (a batch's summary line of a failed file).
+pub fn one_line(err: &anyhow::Error) -> String {
+    chain_texts(err).join(": ")
+}
+
+/// Prints `error: …` with its chain of causes; exit code 130 when cancelled, else 1.
+pub fn report_error(err: &anyhow::Error) -> ExitCode {
+    let mut stderr = std::io::stderr();
+    let texts = chain_texts(err);
+    let _ = writeln!(stderr, "error: {}", texts[0]);
+    for text in &texts[1..] {
+        let _ = writeln!(stderr, "  caused by: {}", text);
     }
     let cancelled =
         err.chain().any(|c| matches!(c.downcast_ref::<fluidymation::Error>(), Some(fluidymation::Error::Cancelled)));

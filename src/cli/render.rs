@@ -1,9 +1,9 @@
 //! `fluidymation render`: the whole pipeline, as motion designers run it, for one file or a
 //! batch; and the options it shares with `plan`, `render-layer` and `composite`.
 
-use super::Ctx;
 use super::params::{ExemplarDirs, SynthFlags, Threads, parse_frames, parse_keyframe, warn_if_clipped};
 use super::progress::{Bars, handle_interrupts};
+use super::{Ctx, one_line};
 use anyhow::{Context, Result, bail};
 use fluidymation::anim::{self, Animation, LoadOptions};
 use fluidymation::render::{self, Recolor, RenderOptions, RenderSummary, StrokeMode, Style};
@@ -634,7 +634,7 @@ fn run_batch(args: &Args, ctx: &Ctx, layout: Vec<(PathBuf, Option<PathBuf>)>, st
         .zip(&args.targets.inputs)
         .zip(layout)
         .map(|((anim, input), (out_dir, gif))| {
-            let anim = anim.as_ref().map_err(|e| anyhow::anyhow!("{e:#}"))?;
+            let anim = anim.as_ref().map_err(|e| anyhow::anyhow!("{}", one_line(e)))?;
             let mut opts = file_options(anim, input, out_dir, gif, &args.render, styles)?;
             opts.eval = args.eval;
             Ok(opts)
@@ -685,7 +685,7 @@ fn run_batch(args: &Args, ctx: &Ctx, layout: Vec<(PathBuf, Option<PathBuf>)>, st
         .iter_mut()
         .map(|o| match o {
             Ok(_) => Err(anyhow::anyhow!("not rendered")),
-            Err(e) => Err(anyhow::anyhow!("{e:#}")),
+            Err(e) => Err(anyhow::anyhow!("{}", one_line(e))),
         })
         .collect();
     for (slot, r) in slots.into_iter().zip(rendered) {
@@ -715,7 +715,7 @@ fn run_batch(args: &Args, ctx: &Ctx, layout: Vec<(PathBuf, Option<PathBuf>)>, st
             match r {
                 Ok(s) if !ctx.quiet => eprintln!("  ok      {}: {}", input.display(), summary_line(s)),
                 Ok(_) => {}
-                Err(e) => eprintln!("  FAILED  {}: {:#}", input.display(), e),
+                Err(e) => eprintln!("  FAILED  {}: {}", input.display(), one_line(e)),
             }
         }
     }

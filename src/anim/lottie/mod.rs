@@ -375,12 +375,7 @@ pub fn from_model(path: &Path, model: Model, options: &LoadOptions) -> Result<An
     let (background, bg_layers) = background(&model);
     let specs = region_specs(&model, &bg_layers, options.split_precomps, &mut warnings);
     if specs.is_empty() {
-        return Err(Error::Empty {
-            path: path.to_path_buf(),
-            what:
-                "no layer draws anything that could be stylized (only nulls, mattes, background or unsupported layers)"
-                    .into(),
-        });
+        return Err(Error::Empty { path: path.to_path_buf(), what: nothing_to_stylize(&model, &bg_layers) });
     }
     let mut regions = Vec::with_capacity(specs.len());
     let mut targets = Vec::with_capacity(specs.len());
@@ -448,6 +443,77 @@ fn background(model: &Model) -> (Option<Background>, Vec<usize>) {
     (background, bg_layers)
 }
 
+/// Most layers of a composition [`nothing_to_stylize`] names (the rest are counted).
+const MAX_LISTED: usize = 8;
+
+/// The error when no root layer is a region: each layer (the first [`MAX_LISTED`]) with why
+/// it is not one, e.g. "layer 1 'title' (text): text layers are not supported".
+fn nothing_to_stylize(model: &Model, bg_layers: &[usize]) -> String {
+    format!("no layer draws anything that could be stylized: {}", why_no_regions(model, 0, bg_layers))
+}
+
+/// Why no layer of composition `c` is a region, layer by layer.
+fn why_no_regions(model: &Model, c: usize, bg_layers: &[usize]) -> String {
+    let layers = &model.comps[c].layers;
+    let mut why: Vec<String> = layers
+        .iter()
+        .enumerate()
+        .take(MAX_LISTED)
+        .map(|(li, l)| {
+            let kind = match l.ty {
+                Some(0) => " (precomp)".to_string(),
+                Some(1) => " (solid)".to_string(),
+                Some(2) => " (image)".to_string(),
+                Some(3) => " (null)".to_string(),
+                Some(4) => " (shape)".to_string(),
+                Some(5) => " (text)".to_string(),
+                Some(t) => format!(" (type {t})"),
+                None => String::new(),
+            };
+            format!("layer {} '{}'{kind}: {}", li + 1, l.name, not_a_region(model, c, li, bg_layers))
+        })
+        .collect();
+    if layers.len() > MAX_LISTED {
+        why.push(format!("and {} more layers", layers.len() - MAX_LISTED));
+    }
+    why.join("; ")
+}
+
+/// Why layer `li` of composition `c` is not a region (the reasons [`region_specs`] skips a
+/// layer for; a root precomp is only skipped when its layers are regions of their own).
+fn not_a_region(model: &Model, c: usize, li: usize, bg_layers: &[usize]) -> String {
+    let comp = &model.comps[c];
+    let l = &comp.layers[li];
+    if c == 0 && bg_layers.contains(&li) {
+        return "it is the background (an opaque solid covering the canvas), which is not stylized".into();
+    }
+    if l.is_matte_source {
+        return match comp.layers.iter().position(|m| m.matte.is_some_and(|(_, src)| src == li)) {
+            Some(m) => format!("it is the track matte of layer {} '{}', not drawn itself", m + 1, comp.layers[m].name),
+            None => "it is a track matte (td), not drawn itself".into(),
+        };
+    }
+    if l.ty == Some(3) {
+        return "a null draws nothing (it only moves the layers parented to it)".into();
+    }
+    if l.hidden {
+        return "it is hidden (hd)".into();
+    }
+    if let Some(why) = &l.nothing {
+        return why.clone();
+    }
+    if matches!(l.transform.opacity, value::Value::Fixed(o) if o.is_nan() || o <= 0.0) {
+        return "its opacity is 0 throughout".into();
+    }
+    match l.content {
+        Content::Precomp { comp: inner, .. } if c == 0 => format!(
+            "with --split-precomps each layer inside it is a region, and none draws anything ({})",
+            why_no_regions(model, inner, &[])
+        ),
+        _ => "it draws nothing".into(),
+    }
+}
+
 /// A region before its name is made unique.
 struct Spec {
     target: Target,
@@ -463,7 +529,7 @@ fn region_specs(model: &Model, bg_layers: &[usize], split: bool, warnings: &mut 
     let root = &model.comps[0];
     let mut specs = Vec::new();
     for (li, l) in root.layers.iter().enumerate() {
-        if bg_layers.contains(&li) || l.is_matte_source || l.ty == 3 || l.hidden {
+        if bg_layers.contains(&li) || l.is_matte_source || l.ty == Some(3) || l.hidden {
             continue;
         }
         if draws_nothing(l) {

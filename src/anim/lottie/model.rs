@@ -5,6 +5,7 @@
 use super::geom::Bez;
 use super::schema;
 use super::value::{Animatable, Color, Value};
+use crate::error::number;
 use glam::{Affine2, Vec2};
 use std::collections::HashMap;
 
@@ -579,8 +580,8 @@ pub enum Content {
 pub struct Layer {
     /// Name.
     pub name: String,
-    /// Lottie type number.
-    pub ty: i64,
+    /// Lottie type number (`None` when `ty` is missing or not a whole number).
+    pub ty: Option<i64>,
     /// `ind`.
     pub ind: Option<i64>,
     /// Position of the parent layer in the same composition.
@@ -607,6 +608,9 @@ pub struct Layer {
     pub time_remap: Option<Value<f32>>,
     /// What it draws.
     pub content: Content,
+    /// Why its type draws nothing (text, image, a missing precomp asset, an unreadable `ty`),
+    /// without the layer's name: the error when no layer can be stylized quotes it.
+    pub nothing: Option<String>,
     /// Problems found in this layer.
     pub warnings: Vec<String>,
 }
@@ -703,6 +707,18 @@ fn solid_color(sc: Option<&str>) -> Option<[f32; 4]> {
     Some([c(0)?, c(2)?, c(4)?, 1.0])
 }
 
+/// The type of the layer at JSON path `at`, or why it cannot be read.
+fn layer_type(ty: Option<&Result<f64, String>>, at: &str) -> Result<i64, String> {
+    match ty {
+        None => Err(format!("{at}.ty is missing, expected a number (the layer type)")),
+        Some(Err(written)) => Err(format!("{at}.ty is {written}, expected a number (the layer type)")),
+        Some(Ok(t)) if t.fract() != 0.0 || t.abs() > 1e9 => {
+            Err(format!("{at}.ty is {}, expected a whole number (the layer type)", number(*t)))
+        }
+        Some(Ok(t)) => Ok(*t as i64),
+    }
+}
+
 struct Builder<'a> {
     asset_ids: HashMap<String, usize>,
     assets: &'a [schema::Asset],
@@ -711,8 +727,11 @@ struct Builder<'a> {
 }
 
 impl Builder<'_> {
-    fn comp(&mut self, layers: &[schema::Layer], depth: usize) -> Composition {
-        let mut out: Vec<Layer> = layers.iter().map(|l| self.layer(l, depth)).collect();
+    /// The layers of a composition; `at` is the JSON path of the list (`layers`,
+    /// `assets[2].layers`), for messages.
+    fn comp(&mut self, layers: &[schema::Layer], at: &str, depth: usize) -> Composition {
+        let mut out: Vec<Layer> =
+            layers.iter().enumerate().map(|(i, l)| self.layer(l, &format!("{at}[{i}]"), depth)).collect();
         // Parents by `ind`, in any order.
         let by_ind: HashMap<i64, usize> = out.iter().enumerate().filter_map(|(i, l)| l.ind.map(|x| (x, i))).collect();
         for (i, src) in layers.iter().enumerate() {
@@ -779,52 +798,38 @@ impl Builder<'_> {
         Composition { layers: out }
     }
 
-    fn asset(&mut self, id: &str, depth: usize, w: &mut Warn) -> Option<usize> {
+    /// The composition of precomp asset `id`; `Err` says why there is none.
+    fn asset(&mut self, id: &str, depth: usize) -> Result<usize, String> {
         let Some(&idx) = self.asset_ids.get(id) else {
-            w.add(format!("precomp asset '{id}' does not exist; layer draws nothing"));
-            return None;
+            return Err(format!("precomp asset '{id}' does not exist"));
         };
         let comp_index = idx + 1;
         if self.comps[comp_index].is_some() {
-            return Some(comp_index);
+            return Ok(comp_index);
         }
         if depth >= MAX_DEPTH {
-            w.add(format!("precomps nested deeper than {MAX_DEPTH} (or a reference cycle); '{id}' not drawn"));
-            return None;
+            return Err(format!("precomps nested deeper than {MAX_DEPTH} (or a reference cycle) at '{id}'"));
         }
         let Some(layers) = self.assets[idx].layers.as_ref() else {
-            w.add(format!("asset '{id}' is an image; image layers are not supported"));
-            return None;
+            return Err(format!("asset '{id}' is an image (image layers are not supported)"));
         };
         // Mark as in progress (empty) so that a cycle terminates.
         self.comps[comp_index] = Some(Composition::default());
-        let comp = self.comp(layers, depth + 1);
+        let comp = self.comp(layers, &format!("assets[{idx}].layers"), depth + 1);
         self.comps[comp_index] = Some(comp);
-        Some(comp_index)
+        Ok(comp_index)
     }
 
-    /// What a layer of type `ty` draws, and its time remap (precomps).
-    fn content(&mut self, l: &schema::Layer, ty: i64, depth: usize, w: &mut Warn) -> (Content, Option<Value<f32>>) {
-        let mut time_remap = None;
-        let content = match ty {
+    /// What a layer of type `ty` draws (`Content::Nothing` for a null); `Err` says why a layer
+    /// that should draw something draws nothing.
+    fn content(&mut self, l: &schema::Layer, ty: i64, depth: usize, w: &mut Warn) -> Result<Content, String> {
+        Ok(match ty {
             0 => {
-                let comp = match l.refId.as_deref() {
-                    Some(id) => self.asset(id, depth, w),
-                    None => {
-                        w.add("precomp layer without refId; draws nothing");
-                        None
-                    }
-                };
-                if l.tm.is_some() {
-                    time_remap = Some(prop(l.tm.as_ref(), 0.0, "time remap", w));
-                }
-                match comp {
-                    Some(comp) => Content::Precomp {
-                        comp,
-                        width: l.w.unwrap_or(f64::INFINITY) as f32,
-                        height: l.h.unwrap_or(f64::INFINITY) as f32,
-                    },
-                    None => Content::Nothing,
+                let id = l.refId.as_deref().ok_or("precomp layer without refId")?;
+                Content::Precomp {
+                    comp: self.asset(id, depth)?,
+                    width: l.w.unwrap_or(f64::INFINITY) as f32,
+                    height: l.h.unwrap_or(f64::INFINITY) as f32,
                 }
             }
             1 => {
@@ -834,26 +839,17 @@ impl Builder<'_> {
                 });
                 Content::Solid { color, width: l.sw.unwrap_or(0.0) as f32, height: l.sh.unwrap_or(0.0) as f32 }
             }
-            2 => {
-                w.add("image layers are not supported; nothing drawn");
-                Content::Nothing
-            }
+            2 => return Err("image layers are not supported".into()),
             3 => Content::Nothing,
             4 => Content::Shapes(shapes(l.shapes.iter().flatten(), w, 0)),
-            5 => {
-                w.add("text layers are not supported; nothing drawn");
-                Content::Nothing
-            }
-            other => {
-                w.add(format!("layer type {other} is not supported; nothing drawn"));
-                Content::Nothing
-            }
-        };
-        (content, time_remap)
+            5 => return Err("text layers are not supported".into()),
+            other => return Err(format!("layer type {other} is not supported")),
+        })
     }
 
-    fn layer(&mut self, l: &schema::Layer, depth: usize) -> Layer {
-        let ty = l.ty.filter(|t| t.is_finite()).map(|t| t as i64).unwrap_or(-1);
+    /// A layer; `at` is its JSON path (`layers[0]`), for messages.
+    fn layer(&mut self, l: &schema::Layer, at: &str, depth: usize) -> Layer {
+        let ty = layer_type(l.ty.as_ref(), at);
         let name = l.nm.clone().unwrap_or_else(|| format!("layer {}", l.ind.map(|i| i as i64).unwrap_or(0)));
         let mut warnings = Vec::new();
         let mut w = Warn { layer: &name, out: &mut warnings };
@@ -874,7 +870,15 @@ impl Builder<'_> {
         }
         let transform = Transform::from_schema(l.ks.as_ref(), &mut w);
         let masks = l.masksProperties.iter().flatten().map(|m| mask(m, &mut w)).collect();
-        let (content, time_remap) = self.content(l, ty, depth, &mut w);
+        let content = ty.clone().and_then(|ty| self.content(l, ty, depth, &mut w));
+        let (content, nothing) = match content {
+            Ok(content) => (content, None),
+            Err(why) => {
+                w.add(format!("{why}; nothing drawn"));
+                (Content::Nothing, Some(why))
+            }
+        };
+        let time_remap = (ty == Ok(0) && l.tm.is_some()).then(|| prop(l.tm.as_ref(), 0.0, "time remap", &mut w));
         let finite = |v: Option<f64>, d: f32| v.map(|x| x as f32).filter(|x| x.is_finite()).unwrap_or(d);
         let sr = finite(l.sr, 1.0);
         Layer {
@@ -891,7 +895,8 @@ impl Builder<'_> {
             is_matte_source: false,
             time_remap,
             content,
-            ty,
+            nothing,
+            ty: ty.ok(),
             name,
             warnings,
         }
@@ -913,7 +918,7 @@ pub fn build(root: &schema::Root, width: f32, height: f32, fps: f32, ip: f32, op
         comps: (0..=root.assets.len()).map(|_| None).collect(),
         warnings: Vec::new(),
     };
-    let rootc = b.comp(root.layers.as_deref().unwrap_or(&[]), 0);
+    let rootc = b.comp(root.layers.as_deref().unwrap_or(&[]), "layers", 0);
     if root.chars {
         b.warnings.push("the file embeds glyphs (chars) for text; text is not supported".into());
     }

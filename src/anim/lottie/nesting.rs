@@ -20,7 +20,7 @@ pub const MAX_OFFSCREEN_PIXELS: f64 = (1u64 << 30) as f64;
 
 /// The precomp layers (`ty` 0) of a list of layers: their asset ids.
 fn refs(layers: &[schema::Layer]) -> impl Iterator<Item = &str> {
-    layers.iter().filter(|l| l.ty == Some(0.0)).filter_map(|l| l.refId.as_deref())
+    layers.iter().filter(|l| l.ty == Some(Ok(0.0))).filter_map(|l| l.refId.as_deref())
 }
 
 /// Checks the precomp references reachable from the root: no cycle, at most [`MAX_DEPTH`]

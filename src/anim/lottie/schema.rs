@@ -9,8 +9,9 @@
 //! booleans, numeric strings, a number wrapped in an array, colors in `0..=255`); a value
 //! that cannot be read becomes [`Value::Malformed`] (the model warns and uses the default),
 //! and a shape item that cannot be read is kept as its type's default with the reason in
-//! [`ShapeEntry::error`]. Only a structure that is wrong as a whole (a transform that is a
-//! number, `layers` that is not a list) fails the file.
+//! [`ShapeEntry::error`]; a layer's `ty` that is not a number is kept as written, for the
+//! warning that quotes it with its JSON path. Only a structure that is wrong as a whole (a
+//! transform that is a number, `layers` that is not a list) fails the file.
 //!
 //! Keys that are only skipped (`a`, `nm`, …) are declared anyway, in their usual order: serde
 //! also reads a struct from an array, by position, and a property written as an array must
@@ -42,14 +43,25 @@ fn flag<'de, D: Deserializer<'de>>(d: D) -> Result<bool, D::Error> {
     Ok(flag_of(&Json::deserialize(d)?))
 }
 
-/// Accepts a number (or a numeric string, or a boolean) as `Option<f64>`.
-fn num<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
-    Ok(match Json::deserialize(d)? {
+fn num_of(v: &Json) -> Option<f64> {
+    match v {
         Json::Number(n) => n.as_f64(),
         Json::String(s) => s.trim().parse().ok(),
-        Json::Bool(b) => Some(if b { 1.0 } else { 0.0 }),
+        Json::Bool(b) => Some(if *b { 1.0 } else { 0.0 }),
         _ => None,
-    })
+    }
+}
+
+/// Accepts a number (or a numeric string, or a boolean) as `Option<f64>`.
+fn num<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    Ok(num_of(&Json::deserialize(d)?))
+}
+
+/// Like [`num`], but a present value that is not a number is kept as written (its JSON
+/// text), for a message that quotes it.
+fn num_or_written<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Result<f64, String>>, D::Error> {
+    let v = Json::deserialize(d)?;
+    Ok(Some(num_of(&v).ok_or_else(|| v.to_string())))
 }
 
 fn text_of(v: &Json) -> Option<String> {
@@ -400,9 +412,10 @@ pub struct Asset {
 #[derive(Deserialize, Debug, Default)]
 #[allow(non_snake_case)]
 pub struct Layer {
-    /// Layer type: 0 precomp, 1 solid, 2 image, 3 null, 4 shape, 5 text, …
-    #[serde(default, deserialize_with = "num")]
-    pub ty: Option<f64>,
+    /// Layer type: 0 precomp, 1 solid, 2 image, 3 null, 4 shape, 5 text, …; `Err` holds the
+    /// JSON as written when it is not a number (`"abc"`, `null`).
+    #[serde(default, deserialize_with = "num_or_written")]
+    pub ty: Option<Result<f64, String>>,
     /// Name.
     #[serde(default, deserialize_with = "text")]
     pub nm: Option<String>,
