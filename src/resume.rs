@@ -45,7 +45,7 @@ pub fn fingerprint(text: &str) -> u64 {
 }
 
 /// A digest of an input's content: the bytes of a file, or the names and bytes of the files of
-/// a sequence folder or glob (SVG, else PNG). Renders of the same content resume wherever it
+/// a sequence folder or glob (SVG, else PNG, as [`crate::anim::source`] picks them). Renders of the same content resume wherever it
 /// lies; an input changed since the interrupted run does not.
 pub fn input_digest(path: &Path) -> Result<u64> {
     let mut h = crc32fast::Hasher::new();
@@ -57,7 +57,11 @@ pub fn input_digest(path: &Path) -> Result<u64> {
     if path.is_file() {
         add(&std::fs::read(path).map_err(|e| Error::io(path, e))?);
     } else {
-        let files = crate::seq::list_sequence(path, &["svg"]).or_else(|_| crate::seq::list_sequence(path, &["png"]))?;
+        let files = match crate::anim::source(path)? {
+            crate::anim::Source::Svg(files) | crate::anim::Source::Masks(files) => files,
+            crate::anim::Source::Lottie(file) => vec![file],
+            crate::anim::Source::LottieFiles(files) => files,
+        };
         for f in files {
             add(f.file_name().unwrap_or_default().to_string_lossy().as_bytes());
             add(&std::fs::read(&f).map_err(|e| Error::io(&f, e))?);

@@ -138,3 +138,57 @@ fn inspect_names_a_stroke_only_layer() {
     assert!(!line("body").contains("strokes"), "{text}");
     let _ = std::fs::remove_file(&path);
 }
+
+/// What `inspect` makes of folders, globs and single files: a still from one SVG file, frames
+/// chosen by a `[...]` class, and for inputs that are no animation, what they hold instead.
+#[test]
+fn inspect_reads_stills_classes_and_says_what_a_folder_holds() {
+    let dir = std::env::temp_dir().join(format!("fm-cli-inputs-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let (seq, lottie, empty) = (dir.join("seq"), dir.join("lottie"), dir.join("empty"));
+    for d in [&seq, &lottie, &empty] {
+        std::fs::create_dir_all(d).unwrap();
+    }
+    for k in 1..=4 {
+        let svg = format!(
+            "<svg xmlns='http://www.w3.org/2000/svg' width='64' height='48'><g id='dot'>\
+             <circle cx='{}' cy='24' r='10' fill='#3366d9'/></g></svg>",
+            10 + 8 * k
+        );
+        std::fs::write(seq.join(format!("f0{k}.svg")), svg).unwrap();
+    }
+    let inspect = |input: &Path| bin().arg("inspect").arg(input).output().unwrap();
+    let ok = |input: &Path| {
+        let o = inspect(input);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8(o.stdout).unwrap()
+    };
+    let failed = |input: &Path| {
+        let o = inspect(input);
+        assert_eq!(o.status.code(), Some(1));
+        String::from_utf8(o.stderr).unwrap()
+    };
+    // One SVG file: a still of one frame, its groups the layers.
+    let text = ok(&seq.join("f02.svg"));
+    assert!(text.contains("64x48 px, 24 fps, 1 frame (0.04 s)"), "{text}");
+    assert!(text.contains("01  dot") && text.contains("1..1"), "{text}");
+    // A class selects frames.
+    let text = ok(&seq.join("f0[2-4].svg"));
+    assert!(text.contains("3 frames"), "{text}");
+    // A folder of Lottie files, a glob matching several, an empty folder.
+    std::fs::copy(demo(), lottie.join("a.json")).unwrap();
+    std::fs::copy(demo(), lottie.join("b.json")).unwrap();
+    let l = lottie.display().to_string();
+    let err = failed(&lottie);
+    assert!(err.contains(&format!("'{l}': holds 2 .json files but no SVG frames (.svg) or PNG masks (.png)")), "{err}");
+    assert!(err.contains("`inspect` takes one file"), "{err}");
+    let err = failed(&lottie.join("*.json"));
+    assert!(err.contains(&format!("'{l}/*.json': matches 2 Lottie .json files (a.json, b.json)")), "{err}");
+    assert!(!err.contains("SVG/XML"), "{err}");
+    // A glob matching one Lottie file is that file.
+    assert!(ok(&lottie.join("[a].json")).contains("48 frames"));
+    let err = failed(&empty);
+    let e = empty.display();
+    assert!(err.contains(&format!("'{e}': no SVG frames (.svg) or PNG masks (.png) found: it holds 0 files")), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -908,3 +908,159 @@ fn the_background_color_warning_is_about_fills_that_a_glaze_would_hide() {
 fn os(s: &str) -> &std::ffi::OsStr {
     std::ffi::OsStr::new(s)
 }
+
+/// An 80×80 SVG frame: a red 40×40 square at (`x`, 20) in a group `square`.
+fn square_svg(x: u32) -> String {
+    format!(
+        "<svg xmlns='http://www.w3.org/2000/svg' width='80' height='80'><g id='square'>\
+         <rect x='{x}' y='20' width='40' height='40' fill='#d01010'/></g></svg>"
+    )
+}
+
+#[test]
+fn inputs_that_are_no_animation_say_what_they_hold() {
+    let tmp = Scratch::new("inputs");
+    // A folder of Lottie files: not a sequence; said so, with how to render them as a batch.
+    let lottie = tmp.join("lottie");
+    std::fs::create_dir_all(&lottie).unwrap();
+    std::fs::copy(quads(), lottie.join("quads.json")).unwrap();
+    std::fs::copy(demo(), lottie.join("waving.json")).unwrap();
+    let l = lottie.to_str().unwrap();
+    fails(
+        &tmp,
+        "lottie-folder",
+        &lottie,
+        &[],
+        &[
+            &format!("'{l}': holds 2 .json files but no SVG frames (.svg) or PNG masks (.png)"),
+            "quads.json, waving.json",
+            "given as files, not as their folder",
+            &format!("`render '{l}/quads.json' '{l}/waving.json' -o OUT_DIR`"),
+            &format!("`render '{l}/*.json' -o OUT_DIR`"),
+            "batch",
+        ],
+    );
+    // An empty folder, and one of other files: every kind a folder may hold, and what it holds.
+    let empty = tmp.join("empty");
+    std::fs::create_dir_all(&empty).unwrap();
+    let accepted = "no SVG frames (.svg) or PNG masks (.png) found";
+    let e = empty.to_str().unwrap();
+    fails(&tmp, "empty-folder", &empty, &[], &[&format!("'{e}': {accepted}: it holds 0 files")]);
+    let notes = tmp.join("notes");
+    std::fs::create_dir_all(notes.join("sub")).unwrap();
+    for n in ["a.txt", "b.txt", "c.txt", "README"] {
+        std::fs::write(notes.join(n), "x").unwrap();
+    }
+    let n = notes.to_str().unwrap();
+    fails(
+        &tmp,
+        "text-folder",
+        &notes,
+        &[],
+        &[&format!("'{n}': {accepted}: it holds 3 .txt files, 1 file without an extension and 1 folder")],
+    );
+    // A glob of text files, a glob matching nothing, wildcards in a folder name.
+    fails(
+        &tmp,
+        "text-glob",
+        &notes.join("*.txt"),
+        &[],
+        &[&format!("'{n}/*.txt': matches 3 .txt files but no SVG frames (.svg), PNG masks (.png) or Lottie files")],
+    );
+    fails(
+        &tmp,
+        "no-match",
+        &notes.join("f0[1-3].svg"),
+        &[],
+        &[&format!("'{n}/f0[1-3].svg': matches no files ('{n}' holds 3 .txt files")],
+    );
+    fails(&tmp, "folder-glob", &tmp.join("no*/*.txt"), &[], &["only supported in the file name"]);
+    // A file of another kind.
+    fails(
+        &tmp,
+        "text-file",
+        &notes.join("a.txt"),
+        &[],
+        &["a.txt': unknown input: expected a Lottie .json file, an .svg file (a one-frame still)"],
+    );
+}
+
+#[test]
+fn a_quoted_glob_of_lottie_files_is_a_batch() {
+    let tmp = Scratch::new("lottie-glob");
+    let dir = tmp.join("shots");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::copy(quads(), dir.join("quads.json")).unwrap();
+    std::fs::copy(demo(), dir.join("waving.json")).unwrap();
+    std::fs::write(dir.join("notes.txt"), "not matched").unwrap();
+    let out = tmp.join("out");
+    // As the shell leaves it when quoted: `render 'shots/*.json'`.
+    let o = render(&dir.join("*.json"), &out, &["--scale", "0.25", "--frames", "1..2"]);
+    assert_success(&o);
+    let err = stderr(&o);
+    assert!(err.contains("2 files in") && err.contains("2 rendered, 0 failed"), "{err}");
+    let mut expected: Vec<String> = Vec::new();
+    for name in ["quads", "waving"] {
+        expected.push(name.to_string());
+        expected.extend(complete(1..=2).into_iter().map(|f| format!("{name}/{f}")));
+    }
+    expected.sort();
+    assert_eq!(tree(&out), expected);
+    // A class that matches one file renders that file alone, into OUT_DIR itself.
+    let one = tmp.join("one");
+    assert_success(&render(&dir.join("[q]*.json"), &one, &["--scale", "0.25", "--frames", "1..2"]));
+    assert_eq!(tree(&one), complete(1..=2));
+}
+
+#[test]
+fn svg_globs_take_character_classes() {
+    let tmp = Scratch::new("svg-class");
+    let seq = tmp.join("seq");
+    std::fs::create_dir_all(&seq).unwrap();
+    for k in 1..=5 {
+        std::fs::write(seq.join(format!("f0{k}.svg")), square_svg(10 + 2 * k)).unwrap();
+    }
+    for (glob, frames) in [("f0[1-3].svg", 3), ("f0[!1-3].svg", 2), ("f0[15].svg", 2), ("f0?.svg", 5)] {
+        let out = tmp.join(&format!("out-{frames}-{}", glob.len()));
+        let o = render(&seq.join(glob), &out, &["--scale", "0.5"]);
+        assert_success(&o);
+        assert_eq!(tree(&out), complete(1..=frames), "{glob}");
+    }
+    // The help says which globs are understood.
+    let o = bin().args(["render", "--help"]).output().unwrap();
+    let help = String::from_utf8(o.stdout).unwrap();
+    assert!(help.contains("`[...]` classes (`[0-9]`, `[!0-9]`)"), "{help}");
+}
+
+#[test]
+fn a_single_svg_file_renders_as_a_still() {
+    let tmp = Scratch::new("svg-still");
+    let file = tmp.join("still.svg");
+    std::fs::write(&file, square_svg(20)).unwrap();
+    let out = tmp.join("out");
+    let gif = tmp.join("still.gif");
+    let o = render(&file, &out, &["--gif", gif.to_str().unwrap()]);
+    assert_success(&o);
+    assert!(stderr(&o).contains("1 frame in"), "{}", stderr(&o));
+    assert_eq!(tree(&out), complete(1..=1));
+    check_gif(&gif, &out, 1, 24.0, (80, 80));
+    // The square is painted in its red (glazed), and the paper around it left white.
+    let img = rgba(&out.join("0001.png"));
+    assert_eq!(img.dimensions(), (80, 80));
+    let mut mean = HueMean::default();
+    for (x, y, _) in img.enumerate_pixels() {
+        mean.add(px(&img, x, y), [1.0; 3]);
+    }
+    assert!(mean.n > 1000, "only {} painted pixels", mean.n);
+    assert!(hue_distance(mean.mean(), hue(hex("#d01010")).0) < HUE_TOLERANCE, "hue {:.1}°", mean.mean());
+    for (x, y) in [(2, 2), (77, 2), (2, 77), (77, 77)] {
+        assert!(px(&img, x, y).iter().all(|&c| c > 0.95), "paper at ({x}, {y}): {:?}", px(&img, x, y));
+    }
+    // Exactly as the one-frame sequence of a folder holding only that file.
+    let folder = tmp.join("folder");
+    std::fs::create_dir_all(&folder).unwrap();
+    std::fs::copy(&file, folder.join("still.svg")).unwrap();
+    let seq_out = tmp.join("seq-out");
+    assert_success(&render(&folder, &seq_out, &[]));
+    assert_eq!(png_bytes(&seq_out), png_bytes(&out));
+}

@@ -378,3 +378,57 @@ fn svg_fill_motion_is_the_elements_step() {
     assert!(by_transform.fill_motion(0, 4).unwrap().is_none(), "frame 5 draws one more element");
     assert!(by_transform.fill_motion(0, 5).unwrap().is_none(), "the last frame has no next");
 }
+
+#[test]
+fn a_single_file_is_a_still_and_classes_select_frames() {
+    let d = dir("still");
+    for k in 1..=5 {
+        let body = format!("<g id='box'><rect x='{k}' y='2' width='6' height='6' fill='#00f'/></g>");
+        std::fs::write(d.join(format!("f0{k}.svg")), frame(&body, 20, 12)).unwrap();
+    }
+    // One file: one frame, the file's own layers, drawn like the same frame of the sequence.
+    let still = anim::load(&d.join("f03.svg"), &LoadOptions::default()).unwrap();
+    assert_eq!((still.width, still.height, still.frames, still.fps), (20, 12, 1, 24.0));
+    assert_eq!(still.regions.len(), 1);
+    assert_eq!((still.regions[0].name.as_str(), still.regions[0].visible.clone()), ("box", 0..1));
+    let seq = anim::load(&d, &LoadOptions::default()).unwrap();
+    assert_eq!(still.render(0, 0).unwrap().fill.data(), seq.render(0, 2).unwrap().fill.data());
+    assert_eq!(anim::source(&d.join("f03.svg")).unwrap(), anim::Source::Svg(vec![d.join("f03.svg")]));
+    // Classes, as a shell has them.
+    let files = |glob: &str| match anim::source(&d.join(glob)).unwrap() {
+        anim::Source::Svg(files) => {
+            files.iter().map(|f| f.file_name().unwrap().to_string_lossy().into_owned()).collect::<Vec<_>>()
+        }
+        s => panic!("{s:?}"),
+    };
+    assert_eq!(files("f0[1-3].svg"), ["f01.svg", "f02.svg", "f03.svg"]);
+    assert_eq!(files("f0[!1-3].svg"), ["f04.svg", "f05.svg"]);
+    assert_eq!(files("f0[52].svg"), ["f02.svg", "f05.svg"]);
+    let a = anim::load(&d.join("f0[2-4].svg"), &LoadOptions::default()).unwrap();
+    assert_eq!(a.frames, 3);
+    assert_eq!(a.render(0, 0).unwrap().fill.data(), seq.render(0, 1).unwrap().fill.data());
+    // A glob's matches of other kinds are left out, as a folder's are.
+    std::fs::write(d.join("f06.txt"), "notes").unwrap();
+    assert_eq!(files("f0*").len(), 5);
+}
+
+#[test]
+fn folders_and_globs_of_other_files_say_what_they_hold() {
+    let d = dir("kinds");
+    std::fs::write(d.join("a.json"), "{}").unwrap();
+    std::fs::write(d.join("b.json"), "{}").unwrap();
+    std::fs::write(d.join("c.txt"), "").unwrap();
+    let e = anim::load(&d, &LoadOptions::default()).unwrap_err();
+    assert!(matches!(e, Error::Empty { .. }), "{e}");
+    let e = e.to_string();
+    assert!(e.contains("holds 2 .json files and 1 .txt file but no SVG frames (.svg) or PNG masks (.png)"), "{e}");
+    assert!(e.contains("(a.json, b.json) are given as files"), "{e}");
+    // A glob of Lottie files is each file, for the caller to load one by one.
+    let both = anim::source(&d.join("*.json")).unwrap();
+    assert_eq!(both, anim::Source::LottieFiles(vec![d.join("a.json"), d.join("b.json")]));
+    assert_eq!(anim::source(&d.join("[a].json")).unwrap(), anim::Source::Lottie(d.join("a.json")));
+    let e = anim::load(&d.join("*.json"), &LoadOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("matches 2 Lottie .json files (a.json, b.json)"), "{e}");
+    let e = anim::load(&d.join("*.txt"), &LoadOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("matches 1 .txt file but no SVG frames (.svg), PNG masks (.png) or Lottie files"), "{e}");
+}

@@ -30,9 +30,9 @@ impl RegionRenderer for MaskSequence {
     }
 }
 
-/// Loads a directory (or glob) of PNG masks as a one-region animation at 24 fps.
-pub(super) fn load(path: &Path, options: &LoadOptions) -> Result<Animation> {
-    let files = crate::seq::list_sequence(path, &["png"])?;
+/// Loads PNG masks (`files` in order, as the directory or glob `path` names them) as a
+/// one-region animation at 24 fps.
+pub(super) fn load(path: &Path, files: Vec<PathBuf>, options: &LoadOptions) -> Result<Animation> {
     if files.len() > super::MAX_FRAMES {
         return Err(Error::Limit {
             path: path.to_path_buf(),
@@ -57,7 +57,7 @@ pub(super) fn load(path: &Path, options: &LoadOptions) -> Result<Animation> {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
-        .filter(|n| !n.contains('*'))
+        .filter(|_| !crate::seq::is_glob(path))
         .unwrap_or_else(|| "masks".to_string());
     let region = Region {
         index: 1,

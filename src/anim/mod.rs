@@ -11,10 +11,12 @@
 //!   region unless [`LoadOptions::split_precomps`]); nulls, matte sources, hidden and fully
 //!   transparent helper layers are not regions; the bottom full-canvas solids are the
 //!   [`Background`]. Frame 0 is the composition's `ip`.
-//! - a directory or `dir/*.svg` glob of SVG frames: regions are the top-level
-//!   groups, identified across frames by name; shapes outside groups form one `root` region.
-//!   Played at 24 fps.
-//! - a directory of PNG masks: one region, 24 fps.
+//! - a directory or `dir/*.svg` glob of SVG frames, or a single `.svg` file (a one-frame
+//!   still): regions are the top-level groups, identified across frames by name; shapes
+//!   outside groups form one `root` region. Played at 24 fps.
+//! - a directory or glob of PNG masks: one region, 24 fps.
+//!
+//! [`source`] tells which an input path is.
 //!
 //! ```no_run
 //! use fluidymation::anim::{self, LoadOptions};
@@ -388,8 +390,8 @@ pub(crate) fn scaled_canvas(path: &Path, width: f32, height: f32, scale: f32) ->
     Ok((side(width, "width")?, side(height, "height")?))
 }
 
-/// Loads an animation: a `.json` Lottie file, a directory or glob of SVG files, or a
-/// directory of PNG masks (one region).
+/// Loads an animation: a `.json` Lottie file, an `.svg` file (a one-frame still), a directory
+/// or glob of SVG files, or a directory or glob of PNG masks (one region); see [`source`].
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Animation> {
     if !(options.scale > 0.0 && options.scale <= 16.0) {
         return Err(Error::param("scale", options.scale, "a number in (0, 16]"));
@@ -399,25 +401,139 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Animation> {
     Ok(animation)
 }
 
+/// What an input path is, as [`source`] decides it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Source {
+    /// A Lottie `.json` file.
+    Lottie(PathBuf),
+    /// SVG frames in order: a folder's `.svg` files, a glob's `.svg` matches, or one `.svg`
+    /// file (a still).
+    Svg(Vec<PathBuf>),
+    /// PNG masks in order: a folder's `.png` files or a glob's `.png` matches.
+    Masks(Vec<PathBuf>),
+    /// A glob matching several Lottie `.json` files (and no SVG frames or PNG masks): each is
+    /// an animation of its own, to be loaded one at a time.
+    LottieFiles(Vec<PathBuf>),
+}
+
+/// What inputs are accepted, for messages.
+const ACCEPTED: &str = "a Lottie .json file, an .svg file (a one-frame still), a folder or glob of SVG frames (.svg), \
+                        or a folder or glob of PNG masks (.png)";
+
+/// At most three file names of `files`, for a message: "a.json, b.json, c.json and 2 more".
+fn some_names(files: &[&PathBuf]) -> String {
+    let names: Vec<String> =
+        files.iter().take(3).map(|f| f.file_name().unwrap_or_default().to_string_lossy().into_owned()).collect();
+    match files.len() {
+        n if n > 3 => format!("{} and {} more", names.join(", "), n - 3),
+        _ => names.join(", "),
+    }
+}
+
+/// The files of one kind among `files`: `.svg` frames if there are any, else `.png` masks,
+/// else `.json` Lottie files (`None` when there are none of these).
+fn pick(files: &[PathBuf]) -> Option<Source> {
+    let of = |ext: &str| -> Vec<PathBuf> {
+        files.iter().filter(|f| crate::seq::extension(f).as_deref() == Some(ext)).cloned().collect()
+    };
+    let (svg, png, json) = (of("svg"), of("png"), of("json"));
+    if !svg.is_empty() {
+        Some(Source::Svg(svg))
+    } else if !png.is_empty() {
+        Some(Source::Masks(png))
+    } else if json.len() == 1 {
+        Some(Source::Lottie(json[0].clone()))
+    } else if !json.is_empty() {
+        Some(Source::LottieFiles(json))
+    } else {
+        None
+    }
+}
+
+/// Decides what the input `path` is:
+/// - a file: by its extension, `.json` a Lottie file, `.svg` a one-frame SVG sequence (a still);
+/// - a folder: its `.svg` files if it has any (other files are ignored), else its `.png`
+///   files; a folder of neither is an error that says what it holds (Lottie files are given as
+///   files, not as their folder);
+/// - a glob (`dir/f*.svg`, `dir/f0[1-3].svg`; see [`crate::seq::GLOB_SYNTAX`]): its matches,
+///   picked by the same rule, or its `.json` matches ([`Source::LottieFiles`] when several).
+pub fn source(path: &Path) -> Result<Source> {
+    if path.is_file() {
+        return match crate::seq::extension(path).as_deref() {
+            Some("json") => Ok(Source::Lottie(path.to_path_buf())),
+            Some("svg") => Ok(Source::Svg(vec![path.to_path_buf()])),
+            _ => Err(Error::animation(path, format!("unknown input: expected {ACCEPTED}"))),
+        };
+    }
+    if path.is_dir() {
+        let contents = crate::seq::Contents::read(path)?;
+        return match pick(&contents.files) {
+            Some(s @ (Source::Svg(_) | Source::Masks(_))) => Ok(s),
+            _ => Err(Error::Empty { path: path.to_path_buf(), what: folder_without_frames(path, &contents) }),
+        };
+    }
+    if crate::seq::is_glob(path) {
+        let files = crate::seq::glob_files(path)?;
+        return pick(&files).ok_or_else(|| Error::Empty {
+            path: path.to_path_buf(),
+            what: format!(
+                "matches {} but no SVG frames (.svg), PNG masks (.png) or Lottie files (.json); expected {ACCEPTED}",
+                crate::seq::Contents { files, folders: 0 }.describe()
+            ),
+        });
+    }
+    Err(Error::io(path, std::io::Error::new(std::io::ErrorKind::NotFound, "no such file or directory")))
+}
+
+/// Why the folder `dir` is not an input: it holds no SVG frames or PNG masks (but maybe
+/// Lottie files, which are given as files).
+fn folder_without_frames(dir: &Path, contents: &crate::seq::Contents) -> String {
+    let holds = contents.describe();
+    let json: Vec<&PathBuf> =
+        contents.files.iter().filter(|f| crate::seq::extension(f).as_deref() == Some("json")).collect();
+    let example = match json.as_slice() {
+        [] => {
+            return format!(
+                "no SVG frames (.svg) or PNG masks (.png) found: it holds {holds}. A folder is read as one \
+                 animation, a sequence of SVG frames or of PNG masks; a Lottie .json or a single .svg is given as \
+                 the file itself"
+            );
+        }
+        [one] => format!("`render '{}' -o OUT_DIR`", one.display()),
+        [a, b, rest @ ..] => format!(
+            "`render '{}' '{}'{} -o OUT_DIR` or `render '{}' -o OUT_DIR`",
+            a.display(),
+            b.display(),
+            if rest.is_empty() { "" } else { " …" },
+            dir.join("*.json").display()
+        ),
+    };
+    format!(
+        "holds {holds} but no SVG frames (.svg) or PNG masks (.png), which is what a folder is read as. Lottie \
+         animations ({}) are given as files, not as their folder: {example} (several inputs are rendered as a \
+         batch, each to OUT_DIR/<name>/; `inspect` takes one file)",
+        some_names(&json)
+    )
+}
+
 /// [`load`] by the input's format.
 fn read(path: &Path, options: &LoadOptions) -> Result<Animation> {
-    let is_dir = path.is_dir();
-    let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
-    if is_dir || crate::seq::is_glob(path) {
-        if crate::seq::list_sequence(path, &["svg"]).is_ok() {
-            return svg::load(path, options);
+    match source(path)? {
+        Source::Lottie(file) => lottie::load(&file, options),
+        Source::Svg(files) => svg::load(path, files, options),
+        Source::Masks(files) => masks::load(path, files, options),
+        Source::LottieFiles(files) => {
+            let refs: Vec<&PathBuf> = files.iter().collect();
+            Err(Error::animation(
+                path,
+                format!(
+                    "matches {} Lottie .json files ({}); each is an animation of its own: give one file, or \
+                     several inputs to `render`, which renders them as a batch (and expands such a glob itself)",
+                    files.len(),
+                    some_names(&refs)
+                ),
+            ))
         }
-        return masks::load(path, options);
-    }
-    if !path.exists() {
-        return Err(Error::io(path, std::io::Error::new(std::io::ErrorKind::NotFound, "no such file or directory")));
-    }
-    match ext.as_deref() {
-        Some("json") => lottie::load(path, options),
-        _ => Err(Error::animation(
-            path,
-            "unknown input: expected a Lottie .json file, a directory or glob of SVG frames, or a directory of PNG masks",
-        )),
     }
 }
 

@@ -1,5 +1,6 @@
 //! SVG frame sequences: a directory (or `dir/*.svg` glob) of SVG files, one per frame,
-//! sorted naturally and all of the same size, rendered with usvg/resvg.
+//! sorted naturally and all of the same size, rendered with usvg/resvg. A single SVG file is a
+//! sequence of one frame (a still).
 //!
 //! **Layers.** Each top-level `<g>` of the root `<svg>` is a layer, named by its
 //! `inkscape:label` when it has one (Inkscape also gives every layer an automatic `id` such as
@@ -456,9 +457,9 @@ fn collect_fills(group: &usvg::Group, canvas: glam::Affine2, out: &mut Vec<Fill>
     }
 }
 
-/// Loads an SVG frame sequence.
-pub fn load(input: &Path, options: &LoadOptions) -> Result<Animation> {
-    let files = crate::seq::list_sequence(input, &["svg"])?;
+/// Loads an SVG frame sequence: `files` in order, as `input` (a folder, a glob or one file)
+/// names them.
+pub fn load(input: &Path, files: Vec<PathBuf>, options: &LoadOptions) -> Result<Animation> {
     if files.len() > MAX_FRAMES {
         return Err(Error::Limit {
             path: input.to_path_buf(),

@@ -16,7 +16,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 /// Arguments of `inspect`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// A Lottie .json file, a directory or glob of SVG frames, or a directory of PNG masks.
+    /// A Lottie .json file, an .svg file (a one-frame still), a folder or quoted glob of SVG
+    /// frames, or a folder or glob of PNG masks. Globs: `*`, `?` and `[...]` classes (`[0-9]`,
+    /// `[!0-9]`) in the file name.
     pub input: PathBuf,
     /// Print the report as JSON.
     #[arg(long)]
@@ -221,11 +223,12 @@ pub fn run(args: Args, ctx: &Ctx) -> anyhow::Result<()> {
     writeln!(out, "{}", a.path.display())?;
     writeln!(
         out,
-        "  {}x{} px, {} fps, {} frames ({:.2} s)",
+        "  {}x{} px, {} fps, {} frame{} ({:.2} s)",
         a.width,
         a.height,
         (a.fps * 1000.0).round() / 1000.0,
         a.frames,
+        if a.frames == 1 { "" } else { "s" },
         a.duration()
     )?;
     match &a.background {

@@ -124,7 +124,8 @@ fn job_style(style: &str, dirs: &[PathBuf], known: &mut HashMap<String, String>)
 }
 
 /// Runs `plan`.
-pub fn run(args: Args, _ctx: &Ctx) -> Result<()> {
+pub fn run(mut args: Args, _ctx: &Ctx) -> Result<()> {
+    args.targets.expand_lottie_globs();
     let styles = check_args(&args.render)?;
     let layout = args.targets.layout()?;
     let program = std::env::current_exe().context("could not find this program's path")?;

@@ -59,8 +59,10 @@ pub struct RenderArgs {
 /// The inputs and where they go, as `render` and `plan` take them.
 #[derive(clap::Args, Debug)]
 pub struct Targets {
-    /// Lottie .json files, directories or quoted globs of SVG frames, or directories of PNG
-    /// masks. With several, each is written to OUT_DIR/<name>/.
+    /// Lottie .json files (a quoted glob of them, 'shots/*.json', stands for its files), an
+    /// .svg file (a one-frame still), folders or quoted globs of SVG frames, or folders or
+    /// globs of PNG masks. Globs: `*`, `?` and `[...]` classes (`[0-9]`, `[!0-9]`) in the file
+    /// name. With several inputs, each is written to OUT_DIR/<name>/.
     #[arg(required = true, value_name = "INPUT")]
     pub inputs: Vec<PathBuf>,
     /// Output directory for the frames (NNNN.png, 0001 = the first frame); with several
@@ -75,6 +77,25 @@ pub struct Targets {
 }
 
 impl Targets {
+    /// Replaces every glob that matches Lottie files (`'shots/*.json'`, quoted so the shell
+    /// did not expand it) by those files in natural order, as the shell would have: each is
+    /// an input of its own. Other globs stay one input (a sequence of frames).
+    pub fn expand_lottie_globs(&mut self) {
+        self.inputs = std::mem::take(&mut self.inputs)
+            .into_iter()
+            .flat_map(|input| {
+                if !input.exists() && fluidymation::seq::is_glob(&input) {
+                    match anim::source(&input) {
+                        Ok(anim::Source::Lottie(file)) => return vec![file],
+                        Ok(anim::Source::LottieFiles(files)) => return files,
+                        _ => {}
+                    }
+                }
+                vec![input]
+            })
+            .collect();
+    }
+
     /// Where each input goes (see [`output_layout`]).
     pub fn layout(&self) -> Result<Vec<(PathBuf, Option<PathBuf>)>> {
         output_layout(&self.inputs, &self.output, self.gif.as_ref().map(|g| g.as_deref()))
@@ -494,7 +515,7 @@ fn check_svg_frames(inputs: &[PathBuf]) -> Result<()> {
     if inputs.len() > 1 && inputs.iter().all(svg) {
         bail!(
             "{} SVG files were given as {} inputs; an SVG animation is a folder of frames: give the folder, or \
-             quote the glob ('{}/*.svg') so the shell does not expand it",
+             quote the glob ('{}/*.svg') so the shell does not expand it (one .svg file alone is a still)",
             inputs.len(),
             inputs.len(),
             inputs[0].parent().unwrap_or(Path::new(".")).display()
@@ -528,8 +549,9 @@ impl Progress for FileProgress<'_> {
 }
 
 /// Runs `render`.
-pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
+pub fn run(mut args: Args, ctx: &Ctx) -> Result<()> {
     args.threads.apply()?;
+    args.targets.expand_lottie_globs();
     let styles = check_args(&args.render)?;
     if args.parallel_files == 0 {
         bail!("--parallel-files 0: expected at least 1");
