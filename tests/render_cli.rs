@@ -917,14 +917,20 @@ fn square_svg(x: u32) -> String {
     )
 }
 
+/// A folder `name` in `tmp` holding the bundled quads and demo animations as Lottie files.
+fn two_lottie_files(tmp: &Scratch, name: &str) -> PathBuf {
+    let dir = tmp.join(name);
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::copy(quads(), dir.join("quads.json")).unwrap();
+    std::fs::copy(demo(), dir.join("waving.json")).unwrap();
+    dir
+}
+
 #[test]
 fn inputs_that_are_no_animation_say_what_they_hold() {
     let tmp = Scratch::new("inputs");
     // A folder of Lottie files: not a sequence; said so, with how to render them as a batch.
-    let lottie = tmp.join("lottie");
-    std::fs::create_dir_all(&lottie).unwrap();
-    std::fs::copy(quads(), lottie.join("quads.json")).unwrap();
-    std::fs::copy(demo(), lottie.join("waving.json")).unwrap();
+    let lottie = two_lottie_files(&tmp, "lottie");
     let l = lottie.to_str().unwrap();
     fails(
         &tmp,
@@ -952,46 +958,40 @@ fn inputs_that_are_no_animation_say_what_they_hold() {
         std::fs::write(notes.join(n), "x").unwrap();
     }
     let n = notes.to_str().unwrap();
-    fails(
-        &tmp,
-        "text-folder",
-        &notes,
-        &[],
-        &[&format!("'{n}': {accepted}: it holds 3 .txt files, 1 file without an extension and 1 folder")],
-    );
-    // A glob of text files, a glob matching nothing, wildcards in a folder name.
-    fails(
-        &tmp,
-        "text-glob",
-        &notes.join("*.txt"),
-        &[],
-        &[&format!("'{n}/*.txt': matches 3 .txt files but no SVG frames (.svg), PNG masks (.png) or Lottie files")],
-    );
-    fails(
-        &tmp,
-        "no-match",
-        &notes.join("f0[1-3].svg"),
-        &[],
-        &[&format!("'{n}/f0[1-3].svg': matches no files ('{n}' holds 3 .txt files")],
-    );
-    fails(&tmp, "folder-glob", &tmp.join("no*/*.txt"), &[], &["only supported in the file name"]);
-    // A file of another kind.
-    fails(
-        &tmp,
-        "text-file",
-        &notes.join("a.txt"),
-        &[],
-        &["a.txt': unknown input: expected a Lottie .json file, an .svg file (a one-frame still)"],
-    );
+    // The folder of other files, a glob of them, a glob matching nothing, wildcards in a
+    // folder name, a file of another kind.
+    let cases = [
+        (
+            "text-folder",
+            notes.clone(),
+            format!("'{n}': {accepted}: it holds 3 .txt files, 1 file without an extension and 1 folder"),
+        ),
+        (
+            "text-glob",
+            notes.join("*.txt"),
+            format!("'{n}/*.txt': matches 3 .txt files but no SVG frames (.svg), PNG masks (.png) or Lottie files"),
+        ),
+        (
+            "no-match",
+            notes.join("f0[1-3].svg"),
+            format!("'{n}/f0[1-3].svg': matches no files ('{n}' holds 3 .txt files"),
+        ),
+        ("folder-glob", tmp.join("no*/*.txt"), "only supported in the file name".to_string()),
+        (
+            "text-file",
+            notes.join("a.txt"),
+            "a.txt': unknown input: expected a Lottie .json file, an .svg file (a one-frame still)".to_string(),
+        ),
+    ];
+    for (name, input, says) in &cases {
+        fails(&tmp, name, input, &[], &[says]);
+    }
 }
 
 #[test]
 fn a_quoted_glob_of_lottie_files_is_a_batch() {
     let tmp = Scratch::new("lottie-glob");
-    let dir = tmp.join("shots");
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::copy(quads(), dir.join("quads.json")).unwrap();
-    std::fs::copy(demo(), dir.join("waving.json")).unwrap();
+    let dir = two_lottie_files(&tmp, "shots");
     std::fs::write(dir.join("notes.txt"), "not matched").unwrap();
     let out = tmp.join("out");
     // As the shell leaves it when quoted: `render 'shots/*.json'`.
