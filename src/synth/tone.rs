@@ -203,8 +203,9 @@ impl GrainProfile {
 /// `√(want / have)`, bounded to `[1, `[`MAX_GRAIN_GAIN`]`]` (it only gives back), where `have`
 /// is the mean square of the output's grain density `D(full) − D(low)` over the bin's matched
 /// pixels and `want` the exemplar's ([`GrainProfile`]) weighted by the matches' frames. Bins
-/// with fewer than [`MIN_OUTPUT`] matched pixels, and the border band (depths within the
-/// profile's border width b), keep their grain (gain 1).
+/// with fewer than [`MIN_OUTPUT`] matched pixels take the gain of the nearest shallower bin
+/// that has one ([`from_shallower`]); the border band (depths within the profile's border
+/// width b) keeps its grain (gain 1).
 ///
 /// The tone match gives the low-pass the exemplar's tones and detail at each depth; the grain,
 /// voted apart, kept what the vote left of it. Paint that is carried from frame to frame sits
@@ -243,17 +244,37 @@ pub(crate) fn grain_gains(
             wn[b] += 1;
         }
     }
-    (0..DEPTHS)
+    let mut gains: Vec<Option<[f32; 3]>> = (0..DEPTHS)
         .map(|b| {
             if n[b] < MIN_OUTPUT || wn[b] == 0 || (b as f32 + 0.5) <= band {
-                return [1.0; 3];
+                return None;
             }
-            std::array::from_fn(|k| {
+            Some(std::array::from_fn(|k| {
                 let (h, w) = (have[b][k] / n[b] as f64, want[b][k] / wn[b] as f64);
                 if h > 1e-12 && w > 0.0 { (w / h).sqrt().clamp(1.0, MAX_GRAIN_GAIN) as f32 } else { 1.0 }
-            })
+            }))
         })
-        .collect()
+        .collect();
+    from_shallower(&mut gains);
+    gains.into_iter().map(|g| g.unwrap_or([1.0; 3])).collect()
+}
+
+/// Gives every bin without a value of its own (too few output pixels to measure one, at
+/// least [`MIN_OUTPUT`]) the value of the nearest shallower bin that has one; bins shallower
+/// than every bin with a value keep none. The deepest pixels of a round shape — its middle,
+/// a few dozen pixels spread over several 1-px bins — are then corrected like the depths
+/// around them; left as they were, they stood out as a disc of another tone with a crisp
+/// edge where the corrected depths begin (rose-burst on a growing, turning star, seed 1: a
+/// pale dot 5 px across at its middle on all 48 frames, luma 0.82–0.89 inside, 0.59–0.70
+/// around).
+fn from_shallower<T: Clone>(v: &mut [Option<T>]) {
+    let mut last: Option<T> = None;
+    for x in v.iter_mut() {
+        match x {
+            Some(t) => last = Some(t.clone()),
+            None => x.clone_from(&last),
+        }
+    }
 }
 
 /// The gain of [`grain_gains`] at distance `d` from the edge, per channel: linear between the
@@ -471,7 +492,8 @@ fn barycenter<'a>(hists: impl Iterator<Item = (f64, &'a Hist)>, out: &mut [f64; 
 /// the output's local contrast, and with it its changes between frames, came out well above
 /// the exemplar's; the first pass gives each scale its own share first, and the second then
 /// moves little. Between bin centers the results are interpolated linearly. Bins with fewer
-/// than [`MIN_OUTPUT`] matched pixels are left as they are.
+/// than [`MIN_OUTPUT`] matched pixels take the map of the nearest shallower bin that has one
+/// ([`from_shallower`]); a shape too small for any is left as it is.
 pub(crate) fn match_tone(rgb: &mut [Rgb], field: &Nnf, mask: &Mask, dist: &Plane<f32>, prof: &ToneProfile, paper: Rgb) {
     for pass in &prof.passes {
         match_pass(rgb, field, mask, dist, pass, paper);
@@ -508,7 +530,7 @@ fn match_pass(rgb: &mut [Rgb], field: &Nnf, mask: &Mask, dist: &Plane<f32>, prof
         n[b] += 1;
     }
     // Per bin: the coarse band's map per channel (as a table) and the detail's gain.
-    let maps: Vec<Option<BinMap>> = (0..DEPTHS)
+    let mut maps: Vec<Option<BinMap>> = (0..DEPTHS)
         .into_par_iter()
         .map(|b| {
             if n[b] < MIN_OUTPUT {
@@ -544,6 +566,7 @@ fn match_pass(rgb: &mut [Rgb], field: &Nnf, mask: &Mask, dist: &Plane<f32>, prof
             Some((maps.map(|m| m.table()), gain))
         })
         .collect();
+    from_shallower(&mut maps);
     let w = field.w;
     rgb.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
         for (x, c) in row.iter_mut().enumerate() {
@@ -634,6 +657,21 @@ mod tests {
                 assert!((was - want / 2.0).abs() < 1e-3 * want.max(1e-3), "the test's output is half as dense");
                 // Between bin centers the ratio is interpolated: within a few percent.
                 assert!((got - want).abs() < 0.05 * want, "bin {b} channel {k}: {got} against the exemplar's {want}");
+            }
+        }
+        // The disc's middle: its deepest bins have too few pixels for maps of their own and
+        // take the nearest shallower bin's, so it is as dense as the exemplar there too, not
+        // left pale (a disc of another tone).
+        let count = |b: usize| {
+            (0..64 * 64).filter(|&q| g.mask.get(q % 64, q / 64) && bin(g.dist.get(q % 64, q / 64)) == b).count()
+        };
+        let deep: Vec<usize> = (0..DEPTHS).filter(|&b| (1..MIN_OUTPUT).contains(&count(b))).collect();
+        assert!(!deep.is_empty() && deep.iter().all(|&b| b > 9), "the disc's middle has sparse bins: {deep:?}");
+        for &b in &deep {
+            for k in 0..3 {
+                let (was, got) =
+                    (mean_density(&pale, &g.mask, &g.dist, k, b), mean_density(&rgb, &g.mask, &g.dist, k, b));
+                assert!(got > 1.6 * was, "bin {b} channel {k}: {was} -> {got}, not corrected");
             }
         }
         // Paper (here: outside the mask) is not touched.
