@@ -109,10 +109,11 @@ impl Token {
     }
 }
 
-/// Whether the file name `name` matches the glob `pattern`: `*` (any run of characters), `?`
-/// (one character) and `[...]` classes (`[0-9]`, `[abc]`, `[!0-9]`), case-sensitively.
-fn glob_match(pattern: &str, name: &str) -> bool {
-    let (p, n): (Vec<Token>, Vec<char>) = (tokens(pattern), name.chars().collect());
+/// Whether the file name `name` matches the glob `p` (its [`tokens`]): `*` (any run of
+/// characters), `?` (one character) and `[...]` classes (`[0-9]`, `[abc]`, `[!0-9]`),
+/// case-sensitively.
+fn glob_match(p: &[Token], name: &str) -> bool {
+    let n: Vec<char> = name.chars().collect();
     let (mut pi, mut ni, mut star, mut mark) = (0, 0, None, 0);
     while ni < n.len() {
         if pi < p.len() && p[pi].matches(n[ni]) {
@@ -204,7 +205,8 @@ impl Contents {
     }
 }
 
-fn plural(n: usize, what: &str) -> String {
+/// "1 frame", "2 frames": `n` and `what`, with an `s` unless `n` is 1.
+pub fn plural(n: usize, what: &str) -> String {
     format!("{n} {what}{}", if n == 1 { "" } else { "s" })
 }
 
@@ -248,6 +250,7 @@ fn sort_naturally(files: &mut [PathBuf]) {
 /// says what the folder holds.
 pub fn glob_files(input: &Path) -> Result<Vec<PathBuf>> {
     let (dir, pattern) = split_glob(input)?;
+    let glob = tokens(&pattern);
     let entries = std::fs::read_dir(&dir).map_err(|e| Error::io(&dir, e))?;
     let mut files: Vec<PathBuf> = Vec::new();
     for entry in entries {
@@ -257,7 +260,7 @@ pub fn glob_files(input: &Path) -> Result<Vec<PathBuf>> {
             continue;
         }
         let path = entry.path();
-        if path.is_file() && glob_match(&pattern, &name) {
+        if path.is_file() && glob_match(&glob, &name) {
             files.push(path);
         }
     }
@@ -305,6 +308,7 @@ mod tests {
 
     #[test]
     fn globbing() {
+        let glob_match = |pattern: &str, name: &str| super::glob_match(&tokens(pattern), name);
         assert!(glob_match("*.svg", "frame001.svg"));
         assert!(glob_match("fr?me*.svg", "frame001.svg"));
         assert!(!glob_match("*.svg", "frame001.png"));

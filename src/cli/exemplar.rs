@@ -217,9 +217,10 @@ fn list(search: &SearchPath) -> anyhow::Result<()> {
             d.chars().take(MAX_DESCRIPTION - 1).chain(std::iter::once('…')).collect()
         }
     };
-    let dwidth = all.iter().map(|i| cut(&i.description).chars().count()).max().unwrap_or(0).max(11);
+    let descriptions: Vec<String> = all.iter().map(|i| cut(&i.description)).collect();
+    let dwidth = descriptions.iter().map(|d| d.chars().count()).max().unwrap_or(0).max(11);
     outln!("{:width$}  {:>9}  {:>6}  {:>6}  {:dwidth$}  WHERE", "NAME", "SIZE", "FRAMES", "BORDER", "DESCRIPTION");
-    for i in all {
+    for (i, description) in all.iter().zip(&descriptions) {
         let size = format!("{}x{}", i.size.0, i.size.1);
         let hidden = if i.shadowed { " [hidden by an earlier one]" } else { "" };
         outln!(
@@ -228,7 +229,7 @@ fn list(search: &SearchPath) -> anyhow::Result<()> {
             size,
             i.frames,
             i.border_width,
-            cut(&i.description),
+            description,
             i.location,
             hidden
         );

@@ -223,12 +223,11 @@ pub fn run(args: Args, ctx: &Ctx) -> anyhow::Result<()> {
     writeln!(out, "{}", a.path.display())?;
     writeln!(
         out,
-        "  {}x{} px, {} fps, {} frame{} ({:.2} s)",
+        "  {}x{} px, {} fps, {} ({:.2} s)",
         a.width,
         a.height,
         (a.fps * 1000.0).round() / 1000.0,
-        a.frames,
-        if a.frames == 1 { "" } else { "s" },
+        fluidymation::seq::plural(a.frames, "frame"),
         a.duration()
     )?;
     match &a.background {

@@ -621,9 +621,8 @@ fn summary_line(summary: &RenderSummary) -> String {
         (_, r) => format!(" (after {r} resumed)"),
     };
     format!(
-        "{} frame{}{} in {:.1} s ({:.2} s/frame) -> {}{}",
-        summary.frames,
-        if summary.frames == 1 { "" } else { "s" },
+        "{}{} in {:.1} s ({:.2} s/frame) -> {}{}",
+        fluidymation::seq::plural(summary.frames, "frame"),
         resumed,
         summary.seconds,
         summary.seconds_per_frame(),

@@ -127,9 +127,8 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
         // The whole command; per frame, the frames after the preparation.
         let secs = start.elapsed().as_secs_f64();
         eprintln!(
-            "{} frame{} in {:.1} s ({:.2} s/frame after {:.1} s of preparation) -> {}",
-            written,
-            if written == 1 { "" } else { "s" },
+            "{} in {:.1} s ({:.2} s/frame after {:.1} s of preparation) -> {}",
+            fluidymation::seq::plural(written, "frame"),
             t0.elapsed().as_secs_f64(),
             secs / written as f64,
             (time.read + time.prepare).as_secs_f64(),

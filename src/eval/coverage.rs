@@ -83,11 +83,17 @@ pub fn detect_painted(frames: &[Plane<Rgba>], background: Option<Rgb>, threshold
 pub fn painted_mask(frame: &Plane<Rgba>, painted: &Painted) -> Mask {
     match *painted {
         Painted::Alpha => frame.map(|c| c[3] >= super::MASK_THRESHOLD),
-        Painted::Color { background: b, threshold } => frame.map(|c| {
-            let d2 = (c[0] - b[0]).powi(2) + (c[1] - b[1]).powi(2) + (c[2] - b[2]).powi(2);
-            d2 > threshold * threshold
-        }),
+        Painted::Color { background, threshold } => {
+            frame.map(|c| differs_from([c[0], c[1], c[2]], background, threshold))
+        }
     }
+}
+
+/// Whether the color `c` is farther than `threshold` from `background` (Euclidean distance of
+/// sRGB values): painted, by [`Painted::Color`]'s rule.
+#[inline]
+fn differs_from(c: Rgb, background: Rgb, threshold: f32) -> bool {
+    (0..3).map(|k| (c[k] - background[k]).powi(2)).sum::<f32>() > threshold * threshold
 }
 
 /// Intersection and union pixel counts of two masks of the same size.
@@ -179,8 +185,7 @@ impl PaintedProfile {
                     if inside {
                         let k = cover_bin(d);
                         n[k] += 1;
-                        let d2 = (0..3).map(|ch| (c[ch] - background[ch]).powi(2)).sum::<f32>();
-                        p[k] += (d2 > threshold * threshold) as u64;
+                        p[k] += differs_from(*c, background, threshold) as u64;
                     }
                 }
                 (n, p)
