@@ -188,7 +188,7 @@ fn moving_targets_keep_the_rim_texture_and_coherence() {
 /// falloff the minima were ink-rims 0.83/0.99 and blue-bloom 0.76/0.70 (the falloff raises
 /// the first window's contrast more than the later ones': the later windows' absolute
 /// contrast moved by −0.01 to +0.04); before the sharper estimate and κ in the merge
-/// 0.83/0.99 and 0.73/0.76. Green-wash, the hardest (README, `quality`), went from 0.43/0.05
+/// 0.83/0.99 and 0.73/0.76. Green-wash, the hardest (docs/quality.md), went from 0.43/0.05
 /// to 0.61/0.28 with those, to 0.64/0.42 with the falloff, to 0.73/1.00 with the carried
 /// rim and to 0.82/1.00 with the settled field (see the next test). Measured again with the
 /// engine of 2026-12-04, before the tone match: ink-rims 0.94 and 1.00, blue-bloom 0.89 and
@@ -579,8 +579,8 @@ fn extent_term_tells_the_paint_s_age() {
 /// yellow-granules 0.078 against 0.116 (two levels closer on all five, mean 0.115 against
 /// 0.145, 0.79×). Every limb is farther again, both ways: the paint that lagged behind the
 /// limb was painted anew over much of it every frame, and its colors drifted towards the
-/// exemplar's; carried, the limb keeps the colors of its first frame (the README's quality
-/// section, *A moving part's paint is carried with all of its motion*). Floors now: the two
+/// exemplar's; carried, the limb keeps the colors of its first frame (docs/quality.md,
+/// *A moving part's paint is carried with all of its motion*). Floors now: the two
 /// levels' mean at most 0.85× the six's (measured 0.79×; it was 0.75×), no limb beyond 0.2
 /// (measured at most 0.165; it was 0.15); closer on at least four of five, as before.
 ///
@@ -705,11 +705,11 @@ fn limbs_incoherence(part: &str, on: Params, off: Params) -> (Runs, Runs, String
 ///
 /// Measured (printed, `FLUIDYMATION_CACHE=off`): blue-bloom 1.170 against 1.224, green-wash
 /// 0.843 against 1.025, ink-rims 1.232 against 1.410, yellow-granules 1.324 against 1.636
-/// (mean 1.143 against 1.324, 0.86×; over seeds 1–6 with `quality`, the README: 1.141 against
+/// (mean 1.143 against 1.324, 0.86×; over seeds 1–6 with `quality`, docs/quality.md: 1.141 against
 /// 1.310). Since a thin part decides whether it moves (`shift::all_rim`, `shift::moves_noticeably`: a
 /// limb's slow shoulder, and all of it at the turn of a swing, hold too; fourth session of
 /// 2026-12-07, printed): blue-bloom 1.047, green-wash 0.769, ink-rims 1.021, yellow-granules
-/// 1.134 (mean 0.993 against 1.324, 0.75×; over seeds 1–6, the README: 1.030 against 1.310).
+/// 1.134 (mean 0.993 against 1.324, 0.75×; over seeds 1–6, docs/quality.md: 1.030 against 1.310).
 /// Floors: the mean at most 0.92× without, lower on at least three of the four (measured
 /// four).
 #[test]
@@ -730,7 +730,7 @@ fn travelling_border_paint_does_not_boil() {
 /// Measured (sixth session of 2026-12-06, printed): blue-bloom 0.022 against 0.043, green-wash
 /// 0.035 against 0.079, ink-rims 0.035 against 0.049, yellow-granules 0.029 against 0.033
 /// (mean 0.030 against 0.051, 0.59×; the rule before gives exactly the previous engine's
-/// figures). Over seeds 1–6 (`quality`, the README): 0.031 against 0.047, while the
+/// figures). Over seeds 1–6 (`quality`, docs/quality.md): 0.031 against 0.047, while the
 /// incoherent change rises 1.24 → 1.33 (yellow-granules' fine granules 1.33 → 1.73).
 /// Floors: the mean at most 0.8× the rule before's, and closer on at least three of four
 /// (measured four).

@@ -353,7 +353,7 @@ fn translating_disc_speed(r: f32, v: Vec2) -> f32 {
 /// Translating discs keep their speed — less a known shortfall of small, fast ones: a
 /// boundary's speed is a distance change over a whole frame, and a curved front that moves far
 /// for its radius changes its distance by less than `n·v` (about `(|v|² − (n·v)²)/2R` short at
-/// its sides; README, *Where the carrying boils*). The central difference cancels that
+/// its sides; docs/quality.md, *Where the carrying boils*). The central difference cancels that
 /// second-order term; what is left is of third order (a 7-px disc moves half its radius a
 /// frame). Measured (mean flow along the motion over the middle frames, as a fraction of the
 /// speed): radius 7 px at (3.3, 1.7) px/frame 0.908 (0.865 with the forward difference), at

@@ -386,8 +386,8 @@ impl ParamsBuilder {
     /// Not in the paper, whose estimate is the plain average of the overlapping patches
     /// (Kwatra et al. 2005). That average is a blur, and a flat, pale exemplar patch fits a
     /// blur better than texture does: the search drifts to the exemplar's flattest paint, and
-    /// on long animations the paint pales and loses its rim. On the quality suite (README,
-    /// `quality`), 0.5 instead of 0.7 raised contrast on 23 of 25 moving runs (mean 0.669 →
+    /// on long animations the paint pales and loses its rim. On the quality suite
+    /// (docs/quality.md), 0.5 instead of 0.7 raised contrast on 23 of 25 moving runs (mean 0.669 →
     /// 0.694) and lowered incoherent change on 24 (0.798 → 0.753); on the long target
     /// green-wash's lowest window keeps 0.60 of the first window's contrast instead of 0.52.
     /// Lower is sharper still but lets a mistake hold itself in place (the estimate is then
@@ -440,7 +440,7 @@ impl ParamsBuilder {
     /// [`Self::prev_sigma`]): contrast ≥ 0.85 of the exemplar's on 21 of 30 runs instead of 17
     /// (seed 2: 22 instead of 14), mean 0.85 → 0.90, palette mean 0.035 → 0.029, at the cost of
     /// some coherence (incoherent change of the moving runs 0.82 → 0.88); μ = 2 and 8 kept less
-    /// of the rim. The README's quality section has the whole table. 0 switches it off.
+    /// of the rim. docs/quality.md has the whole table. 0 switches it off.
     /// Default: 4.
     pub fn contrast_balance(mut self, mu: f32) -> Self {
         self.p.weights.contrast_balance = mu;
@@ -624,7 +624,7 @@ impl ParamsBuilder {
     /// 0.87. Aging the rim band too (it was first applied deeper than the border width b
     /// only) gave rose-burst's feathered late rim to its still and shrinking ellipses (edge
     /// darkening 0.48–0.61 → 0.75–0.77 of the exemplar's on the 24-frame suite) and lowered the
-    /// incoherent change of green-wash's moving runs (README, quality section). Not in the
+    /// incoherent change of green-wash's moving runs (docs/quality.md). Not in the
     /// paper. Off = Δi as the extents and the nominal step choose it everywhere. Default: on.
     pub fn aging(mut self, on: bool) -> Self {
         self.p.parts.aging = on;
@@ -774,7 +774,7 @@ impl ParamsBuilder {
     /// divide) or at the edge, the segments' rasterized boundaries step by a whole pixel where
     /// the paint moved by less: 1–15 % of a thin bar's carried matches a frame were dropped for
     /// it and replaced by the up-scaled match, 30–39 px away in the exemplar on average
-    /// (measured in the README's *Where the carrying boils*). Moved by a fraction of a pixel,
+    /// (measured in docs/quality.md, *Where the carrying boils*). Moved by a fraction of a pixel,
     /// the paint stays the paint that was there. Measured on the 24-frame quality suite (seeds
     /// 1 and 2): the moving ellipses' incoherent change lower on 36 of 40 runs (mean 0.631 →
     /// 0.605 and 0.630 → 0.607), the limbs' palette closer (ink-rims 0.086 → 0.077 and 0.085 →
@@ -849,13 +849,13 @@ impl ParamsBuilder {
     /// window's rim 0.42 of the first window's). The carried match was re-anchored to the
     /// edge, so keeping it keeps the rim: on that target green-wash's lowest window keeps 1.00
     /// of the first window's rim, every bundled exemplar at least 0.86, and the contrast holds
-    /// better too (blue-bloom's lowest window 0.74 → 0.90; the README, `quality`). Newly
+    /// better too (blue-bloom's lowest window 0.74 → 0.90; docs/quality.md). Newly
     /// covered pixels (a growing edge) have no carried match and are matched afresh as before.
     ///
     /// Kept without any comparison (the rule until 2026-12-05), a carried match that had gone
     /// wrong was never replaced, and the band of a slowly moving shape gathered dark specks and
     /// streaks over the frames; the factor of four replaces those and keeps the rest (measured
-    /// in `pyramid::merge`'s documentation and the README's quality section).
+    /// in `pyramid::merge`'s documentation and docs/quality.md).
     ///
     /// Default: on.
     pub fn carried_rim(mut self, on: bool) -> Self {
@@ -875,7 +875,7 @@ impl ParamsBuilder {
     /// which the vote then averages with its carried neighbours. Judged against the carried
     /// picture, the up-scaled match wins only where the carried one really fits worse. On the
     /// suite's moving ellipses (24 frames, 512²) contrast rose with the same incoherent
-    /// change (the README, `quality`). Not in the paper, which does not say what the merge's
+    /// change (docs/quality.md). Not in the paper, which does not say what the merge's
     /// estimate is voted from. Off = the up-scaled field's estimate. Default: on.
     pub fn carried_estimate(mut self, on: bool) -> Self {
         self.p.parts.carried_estimate = on;
@@ -899,9 +899,9 @@ impl ParamsBuilder {
     /// (yellow-granules 0.70–0.85 → 0.76–0.87 of the exemplar's, green-wash 0.69–0.80 →
     /// 0.74–0.85, blue-bloom 0.75–0.88 → 0.83–0.92, ink-rims 0.85–0.95 → 0.95–1.04), the lowest
     /// window's rim ÷ the first's 0.91–1.01 → 0.95–1.01 (ink-rims 0.97 → 0.96, the others up),
-    /// and the paint changes a little more from frame to frame (incoherent change 0.40–0.80 → 0.45–0.89); the README, `quality`. Not in
-    /// the paper, which does not optimize the finest level and does not say what its merge
-    /// weighs. Default: on.
+    /// and the paint changes a little more from frame to frame (incoherent change 0.40–0.80 → 0.45–0.89);
+    /// docs/quality.md. Not in the paper, which does not optimize the finest level and does not say what its
+    /// merge weighs. Default: on.
     pub fn finest_uniformity(mut self, on: bool) -> Self {
         self.p.parts.finest_uniformity = on;
         self

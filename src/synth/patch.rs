@@ -12,7 +12,7 @@
 //! a deviation from the paper, whose extent term applies everywhere — measured on the quality
 //! suite's 25 moving runs it raised edge darkening from 0.84 to 0.89 on average and lowered
 //! incoherent change from 0.92 to 0.82, with the palette within 0.03 on 20 of 30 runs instead of
-//! 15 (README, `quality`). The occurrence penalty rides in the pixel's
+//! 15 (docs/quality.md). The occurrence penalty rides in the pixel's
 //! eighth lane as `√(penalty/w_Ω)` against a target lane of 0, so it is one more weighted
 //! squared difference ([`super::occurrence::Occurrence`]). In this search metric each rotated tap
 //! reads the nearest exemplar pixel (at most ½ px away); voting samples the rotated windows at
