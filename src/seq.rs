@@ -276,15 +276,34 @@ pub fn glob_files(input: &Path) -> Result<Vec<PathBuf>> {
 }
 
 /// Lists the files of a sequence: every file in directory `input` whose extension is one of
-/// `extensions` (case-insensitive), or the files matching the glob `input` (`dir/*.svg`,
-/// whatever their extension). The result is sorted naturally; an empty sequence is an error
-/// that says what the folder holds instead.
+/// `extensions` (case-insensitive), the files matching the glob `input` (`dir/*.svg`,
+/// whatever their extension), or the file `input` itself when its extension is one of
+/// `extensions` (a one-frame sequence; a file of another kind is an error that names it). The
+/// result is sorted naturally; an empty sequence is an error that says what the folder holds
+/// instead.
 pub fn list_sequence(input: &Path, extensions: &[&str]) -> Result<Vec<PathBuf>> {
     if is_glob(input) && !input.exists() {
         return glob_files(input);
     }
+    let is_one_of = |p: &Path| extension(p).is_some_and(|e| extensions.iter().any(|x| e.eq_ignore_ascii_case(x)));
+    if input.is_file() {
+        if is_one_of(input) {
+            return Ok(vec![input.to_path_buf()]);
+        }
+        let kind = describe_files(&[input.to_path_buf()]).remove(0).replacen("1 ", "a ", 1);
+        let exts: Vec<String> = extensions.iter().map(|e| format!(".{e}")).collect();
+        return Err(Error::Empty {
+            path: input.to_path_buf(),
+            what: format!(
+                "is {kind}, not a sequence: expected a folder or glob of {} files, or one such file",
+                exts.join("/")
+            ),
+        });
+    }
+    if !input.exists() {
+        return Err(Error::io(input, std::io::Error::new(std::io::ErrorKind::NotFound, "no such file or directory")));
+    }
     let contents = Contents::read(input)?;
-    let is_one_of = |p: &PathBuf| extension(p).is_some_and(|e| extensions.iter().any(|x| e.eq_ignore_ascii_case(x)));
     let files: Vec<PathBuf> = contents.files.iter().filter(|p| is_one_of(p)).cloned().collect();
     if files.is_empty() {
         return Err(Error::Empty {

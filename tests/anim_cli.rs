@@ -192,3 +192,83 @@ fn inspect_reads_stills_classes_and_says_what_a_folder_holds() {
     assert!(err.contains(&format!("'{e}': no SVG frames (.svg) or PNG masks (.png) found: it holds 0 files")), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A Lottie field of the wrong type fails the file (exit 1, never a panic) with its JSON path
+/// and what was expected, for `inspect` and `render` alike; before, a string `fr` read as
+/// "missing 'fr'", a string `ip` or `layers[2].ind` was silently ignored, and a `ks` that is a
+/// number gave serde's message with a line and column only.
+#[test]
+fn wrongly_typed_lottie_fields_are_named_by_their_json_path() {
+    let dir = std::env::temp_dir().join(format!("fm-cli-fields-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let shape = |i: u32| {
+        serde_json::json!({"ty": 4, "nm": format!("s{i}"), "ind": i, "ip": 0, "op": 10, "st": 0, "ks": {},
+            "shapes": [{"ty": "rc", "p": {"a": 0, "k": [50, 50]}, "s": {"a": 0, "k": [40, 40]}, "r": {"a": 0, "k": 0}},
+                       {"ty": "fl", "c": {"a": 0, "k": [1, 0, 0, 1]}, "o": {"a": 0, "k": 100}}]})
+    };
+    let base = serde_json::json!({"v": "5.7.1", "fr": 24, "ip": 0, "op": 10, "w": 100, "h": 100,
+        "assets": [{"id": "a", "layers": [shape(1)]}], "layers": [shape(1), shape(2), shape(3)]});
+    type Edit = fn(&mut serde_json::Value);
+    let cases: &[(&str, Edit, &str)] = &[
+        ("fr-string", |d| d["fr"] = "abc".into(), r#"fr is "abc", expected a number (the frame rate)"#),
+        ("ip-string", |d| d["ip"] = "abc".into(), r#"ip is "abc", expected a number (the first frame)"#),
+        ("op-string", |d| d["op"] = "abc".into(), r#"op is "abc", expected a number (the end frame)"#),
+        ("w-string", |d| d["w"] = "abc".into(), r#"w is "abc", expected a number (the canvas width)"#),
+        ("h-string", |d| d["h"] = "abc".into(), r#"h is "abc", expected a number (the canvas height)"#),
+        ("fr-zero", |d| d["fr"] = 0.into(), "frame rate 'fr' is 0; it must be at least 0.01"),
+        ("fr-negative", |d| d["fr"] = (-5).into(), "frame rate 'fr' is -5; it must be at least 0.01"),
+        ("op-zero", |d| d["op"] = 0.into(), "end frame 'op' (0) is not after the first frame 'ip' (0)"),
+        ("op-negative", |d| d["op"] = (-5).into(), "end frame 'op' (-5) is not after the first frame 'ip' (0)"),
+        ("w-zero", |d| d["w"] = 0.into(), "canvas width 'w' is 0; it must be at least 1 pixel"),
+        ("h-negative", |d| d["h"] = (-5).into(), "canvas height 'h' is -5; it must be at least 1 pixel"),
+        ("ind-string", |d| d["layers"][2]["ind"] = "abc".into(), r#"layers[2].ind is "abc", expected a number"#),
+        ("parent-string", |d| d["layers"][1]["parent"] = "x".into(), r#"layers[1].parent is "x", expected a number"#),
+        ("layer-ip-string", |d| d["layers"][1]["ip"] = "x".into(), r#"layers[1].ip is "x", expected a number"#),
+        (
+            "ks-number",
+            |d| d["layers"][1]["ks"] = 5.into(),
+            "layers[1].ks is 5, expected an object (the layer's transform)",
+        ),
+        (
+            "shapes-object",
+            |d| d["layers"][0]["shapes"] = serde_json::json!({}),
+            "layers[0].shapes is an object, expected a list of shape items",
+        ),
+        ("layer-number", |d| d["layers"][1] = 5.into(), "layers[1] is 5, expected an object (a layer)"),
+        ("layers-object", |d| d["layers"] = serde_json::json!({}), "layers is an object, expected a list of layers"),
+        ("assets-number", |d| d["assets"] = 5.into(), "assets is 5, expected a list"),
+        (
+            "asset-layer-ind",
+            |d| d["assets"][0]["layers"][0]["ind"] = "q".into(),
+            r#"assets[0].layers[0].ind is "q", expected a number"#,
+        ),
+    ];
+    for (name, edit, says) in cases {
+        let mut doc = base.clone();
+        edit(&mut doc);
+        let file = dir.join(format!("{name}.json"));
+        std::fs::write(&file, doc.to_string()).unwrap();
+        let out = dir.join(format!("{name}-out"));
+        let commands: [Vec<&std::ffi::OsStr>; 2] = [
+            vec!["inspect".as_ref(), file.as_ref()],
+            vec!["render".as_ref(), file.as_ref(), "-o".as_ref(), out.as_ref(), "-e".as_ref(), "none".as_ref()],
+        ];
+        for args in commands {
+            let o = bin().args(&args).output().unwrap();
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert_eq!(o.status.code(), Some(1), "{name} {:?}: {err}", args[0]);
+            assert!(err.contains(&format!("'{}': {says}", file.display())), "{name} {:?}: {err}", args[0]);
+            assert!(!err.contains("panicked") && !err.contains("not valid JSON"), "{name}: {err}");
+        }
+        assert!(!out.exists(), "{name}: nothing written");
+    }
+    // The untouched file and a negative first frame (allowed by Lottie) load.
+    let file = dir.join("negative-ip.json");
+    let mut doc = base.clone();
+    doc["ip"] = (-5).into();
+    std::fs::write(&file, doc.to_string()).unwrap();
+    let o = bin().arg("inspect").arg(&file).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -30,6 +30,107 @@ fn done_error_and_usage_have_their_codes() {
     }
 }
 
+/// One rule for every count and scale option: a value outside the option's fixed range is a
+/// malformed command line (exit 2, nothing run), refused by the option's value parser with a
+/// message that names the option and the range. (Before, `--threads 0` was 1 and `--threads -1`
+/// 2, `bench --frames 0` ran, and the message of each range came from another place.)
+#[test]
+fn out_of_range_counts_are_usage_errors_that_name_the_option() {
+    let demo = root().join("fixtures/demo/waving.json");
+    let demo = demo.to_str().unwrap();
+    let out = scratch("counts");
+    let out = out.to_str().unwrap();
+    let render = |extra: &[&'static str]| -> Vec<String> {
+        [&["render", demo, "-o", out][..], extra].concat().iter().map(|s| s.to_string()).collect()
+    };
+    let cmd = |args: &[&str]| -> Vec<String> { args.iter().map(|s| s.to_string()).collect() };
+    let plain = |cmd_: &str, extra: &[&str]| -> Vec<String> {
+        let mut v = vec![cmd_.to_string()];
+        v.extend(extra.iter().map(|s| s.to_string()));
+        v
+    };
+    let layer = |extra: &[&str]| {
+        let mut v = cmd(&["render-layer", demo, "-o", out, "--layer", "1"]);
+        v.extend(extra.iter().map(|s| s.to_string()));
+        v
+    };
+    // (command line, the option as clap names it, the range in the message)
+    let cases: Vec<(Vec<String>, &str, &str)> = vec![
+        (render(&["--threads", "0"]), "'--threads <N>'", "from 1 to 1024"),
+        (render(&["--threads", "-1"]), "'--threads <N>'", "from 1 to 1024"),
+        (render(&["--threads", "1025"]), "'--threads <N>'", "from 1 to 1024"),
+        (render(&["--parallel-files", "0"]), "'--parallel-files <N>'", "at least 1"),
+        (render(&["--scale", "0"]), "'--scale <SCALE>'", "(0, 16]"),
+        (render(&["--src-speed", "0"]), "'--src-speed <N>'", "from 1 to 1000"),
+        (render(&["--target-scale", "0"]), "'--target-scale <F>'", "(0.01, 16]"),
+        (layer(&["--threads", "0"]), "'--threads <N>'", "from 1 to 1024"),
+        (layer(&["--scale", "0"]), "'--scale <SCALE>'", "(0, 16]"),
+        (plain("inspect", &[demo, "--scale", "0"]), "'--scale <SCALE>'", "(0, 16]"),
+        (plain("quality", &["--jobs", "0"]), "'--jobs <JOBS>'", "from 1 to 64"),
+        (plain("quality", &["--threads", "0"]), "'--threads <N>'", "from 1 to 1024"),
+        (plain("quality", &["--frames", "0"]), "'--frames <FRAMES>'", "from 2 to 10000"),
+        (plain("quality", &["--long-frames", "1"]), "'--long-frames <LONG_FRAMES>'", "from 2 to 10000"),
+        (plain("quality", &["--window", "0"]), "'--window <WINDOW>'", "at least 1"),
+        (plain("quality", &["--scale", "0"]), "'--scale <SCALE>'", "(0, 4]"),
+        (plain("bench", &["--frames", "0"]), "'--frames <FRAMES>'", "at least 1"),
+        (plain("bench", &["--threads", "0"]), "'--threads <N>'", "from 1 to 1024"),
+        (
+            plain("synth", &["-e", "ink-rims", "--masks", demo, "-o", out, "--threads", "0"]),
+            "'--threads <N>'",
+            "1 to 1024",
+        ),
+        (
+            plain("synth", &["-e", "ink-rims", "--masks", demo, "-o", out, "--target-scale", "0"]),
+            "'--target-scale <F>'",
+            "(0.01, 16]",
+        ),
+        (
+            plain("eval", &[out, "-e", "ink-rims", "--masks", out, "--patch-samples", "0"]),
+            "'--patch-samples <PATCH_SAMPLES>'",
+            "at least 1",
+        ),
+        (
+            plain("eval", &[out, "-e", "ink-rims", "--masks", out, "--flow-radius", "0"]),
+            "'--flow-radius <FLOW_RADIUS>'",
+            "from 1 to 32",
+        ),
+        (
+            plain("eval", &[out, "-e", "ink-rims", "--masks", out, "--src-speed", "0"]),
+            "'--src-speed <N>'",
+            "at least 1",
+        ),
+        (plain("exemplar", &["show", "ink-rims", "--columns", "0"]), "'--columns <COLUMNS>'", "from 1 to 64"),
+        (plain("exemplar", &["show", "ink-rims", "--cell", "0"]), "'--cell <CELL>'", "from 8 to 1024"),
+        (
+            plain("exemplar", &["generate", "--name", "x", "-o", out, "--frames", "0"]),
+            "'--frames <FRAMES>'",
+            "from 2 to 1000",
+        ),
+        (
+            plain("exemplar", &["generate", "--name", "x", "-o", out, "--drops", "0"]),
+            "'--drops <DROPS>'",
+            "from 1 to 16",
+        ),
+        (
+            plain("exemplar", &["generate", "--name", "x", "-o", out, "--steps-per-frame", "0"]),
+            "'--steps-per-frame <STEPS_PER_FRAME>'",
+            "from 1 to 100",
+        ),
+    ];
+    for (args, option, range) in &cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = run(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.starts_with("error: invalid value") && err.contains(option) && err.contains(range),
+            "{args:?}: {err}"
+        );
+        assert!(err.contains("--help"), "{args:?}: {err}");
+    }
+    assert!(!Path::new(out).join("0001.png").exists() && !Path::new(out).join("x").exists(), "nothing was run");
+}
+
 #[test]
 fn frames_past_the_end_are_said() {
     let demo = root().join("fixtures/demo/waving.json");
@@ -104,7 +205,7 @@ fn negative_and_huge_numbers_are_named_not_taken_for_flags() {
     // Each refused with the option's own message (before: "unexpected argument '-1'" and a tip
     // that turned the number into a second input).
     for (args, says) in [
-        (&["--scale", "-1"][..], "--scale -1: expected a number in (0, 16]"),
+        (&["--scale", "-1"][..], "'--scale <SCALE>': expected a number in (0, 16]"),
         (&["--seed", "-1"], "expected a whole number from 0 to 18446744073709551615"),
         (&["--frames", "-3..2"], "--frames '-3..2': frames are numbered from 1"),
         (&["--frames", "1..99999999999999999999"], "frame number 99999999999999999999 is too large"),

@@ -80,8 +80,8 @@ fn synth_names_a_missing_input() {
     assert!(stderr(&o).contains("no-such-masks"), "{}", stderr(&o));
     let masks = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("exemplars/blue-bloom/masks");
     let o = run(&["synth", "-e", "blue-bloom", "--masks", s(&masks), "-o", s(&dir.join("out")), "--target-scale", "0"]);
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(stderr(&o).contains("--target-scale 0"), "{}", stderr(&o));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("invalid value '0' for '--target-scale <F>'"), "{}", stderr(&o));
     assert!(!dir.join("out").join("0001.png").exists(), "nothing written before the error");
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -131,5 +131,52 @@ fn synth_paints_from_a_keyframe() {
     assert!(!o.status.success() && stderr(&o).contains("nine=key.png"), "{}", stderr(&o));
     let o = run(&["synth", "--masks", s(&masks), "-o", s(&out)]);
     assert!(!o.status.success() && stderr(&o).contains("--exemplar"), "{}", stderr(&o));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A single PNG is a one-frame mask sequence wherever a folder or glob of masks is taken
+/// (`synth --masks`, `inspect`, `eval --masks`), as a glob matching that one file is; a file of
+/// another kind, one that is not a PNG inside, or none at all is an error naming it.
+#[test]
+fn a_single_png_is_a_one_frame_mask_sequence() {
+    let dir = scratch("one-png");
+    let one = dir.join("disc.png");
+    image::GrayImage::from_fn(64, 48, |x, y| {
+        let (dx, dy) = (x as f32 - 32.0, y as f32 - 24.0);
+        image::Luma([if dx * dx + dy * dy < 300.0 { 255 } else { 0 }])
+    })
+    .save(&one)
+    .unwrap();
+    let o = run(&["inspect", s(&one)]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("64x48 px") && text.contains("1 frame ") && text.contains("disc"), "{text}");
+    let out = dir.join("out");
+    let o = run(&["synth", "-e", "ink-rims", "--masks", s(&one), "-o", s(&out)]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let frame = image::open(out.join("0001.png")).unwrap();
+    assert_eq!((frame.width(), frame.height()), (64, 48));
+    assert!(!out.join("0002.png").exists());
+    // eval reads the one frame against the one mask (and gets past the listing to the measures).
+    let o = run(&["eval", s(&out.join("0001.png")), "-e", "ink-rims", "--masks", s(&one)]);
+    assert!(!stderr(&o).contains("could not read"), "{}", stderr(&o));
+    // Not a mask: each error names the file and says what is wrong.
+    let text_file = dir.join("notes.txt");
+    std::fs::write(&text_file, "x").unwrap();
+    let fake = dir.join("fake.png");
+    std::fs::write(&fake, "not a png").unwrap();
+    let missing = dir.join("missing.png");
+    for (masks, says) in [
+        (&text_file, "unknown input: expected"),
+        (&fake, "format could not be determined"),
+        (&missing, "no such file or directory"),
+    ] {
+        let o = run(&["synth", "-e", "ink-rims", "--masks", s(masks), "-o", s(&dir.join("bad"))]);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        assert!(stderr(&o).contains(s(masks)) && stderr(&o).contains(says), "{}", stderr(&o));
+    }
+    let o = run(&["eval", s(&out), "-e", "ink-rims", "--masks", s(&text_file)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("notes.txt': is a .txt file, not a sequence"), "{}", stderr(&o));
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -30,8 +30,9 @@ impl RegionRenderer for MaskSequence {
     }
 }
 
-/// Loads PNG masks (`files` in order, as the directory or glob `path` names them) as a
-/// one-region animation at 24 fps.
+/// Loads PNG masks (`files` in order, as the directory, glob or single file `path` names them)
+/// as a one-region animation at 24 fps. The region is named after the folder, or the file
+/// without its extension; "masks" for a glob.
 pub(super) fn load(path: &Path, files: Vec<PathBuf>, options: &LoadOptions) -> Result<Animation> {
     if files.len() > super::MAX_FRAMES {
         return Err(Error::Limit {
@@ -54,8 +55,8 @@ pub(super) fn load(path: &Path, files: Vec<PathBuf>, options: &LoadOptions) -> R
     }
     let scaled = super::scaled_canvas(path, size.0 as f32, size.1 as f32, options.scale)?;
     let scaled = (scaled.0 as usize, scaled.1 as usize);
-    let name = path
-        .file_name()
+    let name = if path.is_file() { path.file_stem() } else { path.file_name() };
+    let name = name
         .map(|n| n.to_string_lossy().into_owned())
         .filter(|_| !crate::seq::is_glob(path))
         .unwrap_or_else(|| "masks".to_string());

@@ -409,7 +409,8 @@ pub enum Source {
     /// SVG frames in order: a folder's `.svg` files, a glob's `.svg` matches, or one `.svg`
     /// file (a still).
     Svg(Vec<PathBuf>),
-    /// PNG masks in order: a folder's `.png` files or a glob's `.png` matches.
+    /// PNG masks in order: a folder's `.png` files, a glob's `.png` matches, or one `.png`
+    /// file (a one-frame mask sequence).
     Masks(Vec<PathBuf>),
     /// A glob matching several Lottie `.json` files (and no SVG frames or PNG masks): each is
     /// an animation of its own, to be loaded one at a time.
@@ -417,8 +418,8 @@ pub enum Source {
 }
 
 /// What inputs are accepted, for messages.
-const ACCEPTED: &str = "a Lottie .json file, an .svg file (a one-frame still), a folder or glob of SVG frames (.svg), \
-                        or a folder or glob of PNG masks (.png)";
+const ACCEPTED: &str = "a Lottie .json file, an .svg file (a one-frame still), a .png mask (one frame), a folder or glob \
+                        of SVG frames (.svg), or a folder or glob of PNG masks (.png)";
 
 /// At most three file names of `files`, for a message: "a.json, b.json, c.json and 2 more".
 fn some_names(files: &[&PathBuf]) -> String {
@@ -451,7 +452,8 @@ fn pick(files: &[PathBuf]) -> Option<Source> {
 }
 
 /// Decides what the input `path` is:
-/// - a file: by its extension, `.json` a Lottie file, `.svg` a one-frame SVG sequence (a still);
+/// - a file: by its extension, `.json` a Lottie file, `.svg` a one-frame SVG sequence (a still),
+///   `.png` a one-frame mask sequence (as a glob matching that one file);
 /// - a folder: its `.svg` files if it has any (other files are ignored), else its `.png`
 ///   files; a folder of neither is an error that says what it holds (Lottie files are given as
 ///   files, not as their folder);
@@ -462,6 +464,7 @@ pub fn source(path: &Path) -> Result<Source> {
         return match crate::seq::extension(path).as_deref() {
             Some("json") => Ok(Source::Lottie(path.to_path_buf())),
             Some("svg") => Ok(Source::Svg(vec![path.to_path_buf()])),
+            Some("png") => Ok(Source::Masks(vec![path.to_path_buf()])),
             _ => Err(Error::animation(path, format!("unknown input: expected {ACCEPTED}"))),
         };
     }

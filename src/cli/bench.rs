@@ -11,8 +11,8 @@ use std::time::{Duration, Instant};
 /// Arguments of `bench`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Frames to synthesize.
-    #[arg(long, default_value_t = 10)]
+    /// Frames to synthesize (at least 1).
+    #[arg(long, default_value_t = 10, value_parser = super::params::count(1, usize::MAX))]
     pub frames: usize,
     /// Target size WxH (the horse-like shape is scaled to it).
     #[arg(long, default_value = "1000x800")]

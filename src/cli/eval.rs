@@ -48,13 +48,13 @@ pub struct Args {
     #[arg(long, default_value_t = 5.0)]
     pub interior_margin: f32,
     /// Use every n-th exemplar frame, as `synth --src-speed` [default: the exemplar's speed].
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = super::params::count(1, usize::MAX))]
     pub src_speed: Option<usize>,
     /// Resize the exemplar first, as `synth --src-scale` [default: the exemplar's scale].
     #[arg(long, value_name = "FACTOR")]
     pub src_scale: Option<f32>,
     /// Output patches sampled for the nearest-neighbour distance.
-    #[arg(long, default_value_t = 2048)]
+    #[arg(long, default_value_t = 2048, value_parser = super::params::count(1, usize::MAX))]
     pub patch_samples: usize,
     /// Edge darkening compares the band of pixels at most this far inside the edge…
     #[arg(long, value_name = "PX", default_value_t = eval::RIM_BAND)]
@@ -63,7 +63,7 @@ pub struct Args {
     #[arg(long, value_name = "PX", default_value_t = eval::RIM_INTERIOR)]
     pub rim_interior: f32,
     /// Search radius of the block-matching flow, pixels per frame.
-    #[arg(long, default_value_t = 6)]
+    #[arg(long, default_value_t = 6, value_parser = super::params::count(1, 32))]
     pub flow_radius: usize,
     /// Seed of the random sampling (results are deterministic for a seed).
     #[arg(long, default_value_t = 1, value_parser = super::params::parse_seed)]

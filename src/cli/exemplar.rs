@@ -1,6 +1,7 @@
 //! `fluidymation exemplar …`: list, show, generate and import style exemplars.
 
 use super::Ctx;
+use super::params::count;
 use anyhow::{Context, bail};
 use fluidymation::exemplar::generate::{self, GeneratorParams, Pigment};
 use fluidymation::exemplar::import::{self, ImportOptions};
@@ -42,11 +43,11 @@ pub struct ShowArgs {
     /// Write a contact sheet PNG (frames on top, masks below) here.
     #[arg(short, long, value_name = "PNG")]
     pub output: Option<PathBuf>,
-    /// Frames on the contact sheet.
-    #[arg(long, default_value_t = 8)]
+    /// Frames on the contact sheet (1 to 64).
+    #[arg(long, default_value_t = 8, value_parser = count(1, 64))]
     pub columns: usize,
-    /// Largest side of one cell of the contact sheet, pixels.
-    #[arg(long, default_value_t = 200)]
+    /// Largest side of one cell of the contact sheet, pixels (8 to 1024).
+    #[arg(long, default_value_t = 200, value_parser = count(8, 1024))]
     pub cell: usize,
 }
 
@@ -68,8 +69,8 @@ pub struct GenerateArgs {
     /// Seed of every random choice (same seed, same exemplar).
     #[arg(long, default_value_t = 1, value_parser = super::params::parse_seed)]
     pub seed: u64,
-    /// Number of frames.
-    #[arg(long, default_value_t = 30)]
+    /// Number of frames (2 to 1000).
+    #[arg(long, default_value_t = 30, value_parser = count(2, generate::MAX_FRAMES))]
     pub frames: usize,
     /// Frame size, WIDTHxHEIGHT (16–2048 each).
     #[arg(long, default_value = "200x200", value_parser = parse_size)]
@@ -85,7 +86,7 @@ pub struct GenerateArgs {
     #[arg(long, default_value = "0,0", value_parser = parse_pair, allow_hyphen_values = true)]
     pub flow: (f32, f32),
     /// Number of drops (1–16).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = count(1, 16))]
     pub drops: usize,
     /// Drop radius in pixels at 200 px (2–50).
     #[arg(long, default_value_t = 7.0)]
@@ -103,7 +104,7 @@ pub struct GenerateArgs {
     #[arg(long, default_value_t = 0.0)]
     pub drying: f32,
     /// Simulation steps per frame (1–100).
-    #[arg(long, default_value_t = 12)]
+    #[arg(long, default_value_t = 12, value_parser = count(1, 100))]
     pub steps_per_frame: usize,
     /// Frame rate written to the metadata.
     #[arg(long, default_value_t = 24.0)]
@@ -277,9 +278,6 @@ fn show(a: ShowArgs, search: &SearchPath) -> anyhow::Result<()> {
 }
 
 fn write_sheet(ex: &Exemplar, out: &Path, columns: usize, cell: usize) -> anyhow::Result<()> {
-    if !(1..=64).contains(&columns) || !(8..=1024).contains(&cell) {
-        bail!("--columns must be 1–64 and --cell 8–1024 (got {columns} and {cell})");
-    }
     let sheet = exemplar::contact_sheet(ex, columns, cell);
     fluidymation::img::save_rgb(out, &sheet).with_context(|| format!("could not write '{}'", out.display()))
 }

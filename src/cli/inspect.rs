@@ -37,7 +37,7 @@ pub struct Args {
     #[arg(long, value_name = "A..B", allow_hyphen_values = true)]
     pub frames: Option<String>,
     /// Scale the canvas (0.5 = half size).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = super::params::factor(0.0, 16.0))]
     pub scale: f32,
     /// Make each layer inside a top-level precomp a region of its own (`outer/inner`).
     #[arg(long)]

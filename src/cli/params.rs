@@ -61,14 +61,14 @@ pub struct SynthFlags {
     /// draw, in (0, 1) [default: 0.75].
     #[arg(long, value_name = "A")]
     pub patchmatch_alpha: Option<f32>,
-    /// Exemplar frame step [default: the exemplar's recommendation].
-    #[arg(long, value_name = "N")]
+    /// Exemplar frame step, 1 to 1000 [default: the exemplar's recommendation].
+    #[arg(long, value_name = "N", value_parser = count(1, 1000))]
     pub src_speed: Option<usize>,
     /// Exemplar scale [default: the exemplar's recommendation].
     #[arg(long, value_name = "F")]
     pub src_scale: Option<f32>,
-    /// Target scale; the output has the scaled size [default: 1].
-    #[arg(long, value_name = "F")]
+    /// Target scale; the output has the scaled size, in (0.01, 16] [default: 1].
+    #[arg(long, value_name = "F", value_parser = factor(0.01, 16.0))]
     pub target_scale: Option<f32>,
     /// Temporal modulation bounds "m_u,m_l" in pixels, as in the thesis [default: 10,2].
     #[arg(long, value_name = "MU,ML")]
@@ -173,14 +173,11 @@ pub enum Part {
 }
 
 impl SynthFlags {
-    /// `--target-scale` (thesis), validated: how `synth` scales the masks it reads (not an
-    /// engine parameter, so not in [`Params`]; `render` and `quality` scale with `--scale`).
-    pub fn target_scale(&self) -> Result<f32> {
-        let s = self.target_scale.unwrap_or(1.0);
-        if !(s.is_finite() && s > 0.01 && s <= 16.0) {
-            bail!("--target-scale {s}: expected a number in (0.01, 16]");
-        }
-        Ok(s)
+    /// `--target-scale` (thesis; its parser keeps it in (0.01, 16]): how `synth` scales the
+    /// masks it reads (not an engine parameter, so not in [`Params`]; `render` and `quality`
+    /// scale with `--scale`).
+    pub fn target_scale(&self) -> f32 {
+        self.target_scale.unwrap_or(1.0)
     }
 
     /// The validated parameters.
@@ -333,6 +330,34 @@ impl SynthFlags {
     }
 }
 
+/// A value parser for a count option: a whole number from `min` to `max` (`usize::MAX`: no
+/// upper bound). Anything else — `0` where 1 is the least, `-1`, `2.5`, a word — is refused by
+/// clap as a malformed command line (exit code 2), with the option's name and this range:
+/// `invalid value '0' for '--jobs <JOBS>': expected a whole number from 1 to 64`.
+pub fn count(min: usize, max: usize) -> impl Fn(&str) -> std::result::Result<usize, String> + Clone + Send + Sync {
+    move |v| {
+        v.trim().parse::<usize>().ok().filter(|n| (min..=max).contains(n)).ok_or_else(|| {
+            if max == usize::MAX {
+                format!("expected a whole number of at least {min}")
+            } else {
+                format!("expected a whole number from {min} to {max}")
+            }
+        })
+    }
+}
+
+/// A value parser for a scale factor: a number greater than `min` and at most `max`; anything
+/// else is refused by clap like [`count`] (exit code 2, the option and the range named).
+pub fn factor(min: f32, max: f32) -> impl Fn(&str) -> std::result::Result<f32, String> + Clone + Send + Sync {
+    move |v| {
+        v.trim()
+            .parse::<f32>()
+            .ok()
+            .filter(|f| f.is_finite() && *f > min && *f <= max)
+            .ok_or_else(|| format!("expected a number in ({min}, {max}] (greater than {min}, at most {max})"))
+    }
+}
+
 /// Parses a `--seed`: a whole number from 0 to 2⁶⁴ − 1, with a message that says so (the
 /// parser's own reads "invalid digit found in string" for `-1`).
 pub fn parse_seed(v: &str) -> std::result::Result<u64, String> {
@@ -395,8 +420,9 @@ pub fn warn_if_clipped(spec: Option<&str>, range: &std::ops::Range<usize>, total
 /// `--threads`, the same on every command that computes.
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct Threads {
-    /// Worker threads [default: all cores]. The results do not depend on it (timings do).
-    #[arg(long = "threads", value_name = "N")]
+    /// Worker threads, 1 to 1024 [default: all cores]. The results do not depend on it
+    /// (timings do).
+    #[arg(long = "threads", value_name = "N", value_parser = count(1, 1024))]
     pub n: Option<usize>,
 }
 
@@ -404,9 +430,6 @@ impl Threads {
     /// Sizes the global thread pool (all cores when not given).
     pub fn apply(&self) -> Result<()> {
         if let Some(n) = self.n {
-            if n == 0 || n > 1024 {
-                bail!("--threads {}: expected 1..=1024", n);
-            }
             rayon::ThreadPoolBuilder::new().num_threads(n).build_global().context("could not start the thread pool")?;
         }
         Ok(())

@@ -1,7 +1,7 @@
 //! `fluidymation quality`: the quality suite — every exemplar on generated targets, one table.
 
 use super::Ctx;
-use super::params::{ExemplarDirs, SynthFlags, Threads};
+use super::params::{ExemplarDirs, SynthFlags, Threads, count, factor};
 use super::progress::Bars;
 use anyhow::{Context, Result, bail};
 use fluidymation::img;
@@ -20,16 +20,16 @@ pub struct Args {
     pub target: Vec<String>,
     /// Size of the generated targets relative to 512x512; the exemplar, blur and border are
     /// scaled alike, as `render --scale` does (the identity stays at full size).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = factor(0.0, 4.0))]
     pub scale: f32,
-    /// Frames of each generated target but the long one.
-    #[arg(long, default_value_t = 48)]
+    /// Frames of each generated target but the long one (2 to 10000).
+    #[arg(long, default_value_t = 48, value_parser = count(2, 10_000))]
     pub frames: usize,
-    /// Frames of the long target.
-    #[arg(long, default_value_t = 300)]
+    /// Frames of the long target (2 to 10000).
+    #[arg(long, default_value_t = 300, value_parser = count(2, 10_000))]
     pub long_frames: usize,
     /// The long target is also reported per window of this many frames.
-    #[arg(long, default_value_t = 50)]
+    #[arg(long, default_value_t = 50, value_parser = count(1, usize::MAX))]
     pub window: usize,
     /// Write a contact sheet per run (EXEMPLAR-TARGET.png) and the table (quality.txt) here.
     #[arg(long, short = 'o', value_name = "DIR")]
@@ -37,8 +37,8 @@ pub struct Args {
     /// Also write the report as JSON.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
-    /// Runs painted at the same time (each uses every thread for its own stages).
-    #[arg(long, default_value_t = 2)]
+    /// Runs painted at the same time, 1 to 64 (each uses every thread for its own stages).
+    #[arg(long, default_value_t = 2, value_parser = count(1, 64))]
     pub jobs: usize,
     #[command(flatten)]
     pub threads: Threads,

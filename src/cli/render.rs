@@ -1,7 +1,7 @@
 //! `fluidymation render`: the whole pipeline, as motion designers run it, for one file or a
 //! batch; and the options it shares with `plan`, `render-layer` and `composite`.
 
-use super::params::{ExemplarDirs, SynthFlags, Threads, parse_frames, parse_keyframe, warn_if_clipped};
+use super::params::{ExemplarDirs, SynthFlags, Threads, count, factor, parse_frames, parse_keyframe, warn_if_clipped};
 use super::progress::{Bars, handle_interrupts};
 use super::{Ctx, one_line};
 use anyhow::{Context, Result, bail};
@@ -39,7 +39,7 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = StrokeMode::Keep)]
     pub strokes: StrokeMode,
     /// Scale the canvas (0.5 = quick half-size preview; the paint texture scales along).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = factor(0.0, 16.0))]
     pub scale: f32,
     /// Frames to render, 1-based inclusive: A..B, A.., ..B or N [default: all].
     #[arg(long, value_name = "A..B", allow_hyphen_values = true)]
@@ -129,7 +129,7 @@ pub struct Args {
     pub keyframe: Vec<String>,
     /// Files rendered at the same time in a batch (they share the cores; each holds its
     /// layers in memory).
-    #[arg(long, value_name = "N", default_value_t = 2)]
+    #[arg(long, value_name = "N", default_value_t = 2, value_parser = count(1, usize::MAX))]
     pub parallel_files: usize,
     #[command(flatten)]
     pub render: RenderArgs,
@@ -496,9 +496,6 @@ pub fn check_args(args: &RenderArgs) -> Result<Option<Styles>> {
         bail!("--target-scale is for `synth`; use --scale with `render`");
     }
     args.flags.params()?;
-    if !(args.scale > 0.0 && args.scale <= 16.0) {
-        bail!("--scale {}: expected a number in (0, 16] (0.5 = a half-size preview)", args.scale);
-    }
     let styles = style_flags(args)?;
     for (i, (layer, ex)) in styles.iter().enumerate() {
         if let Some((_, later)) = styles[i + 1..].iter().find(|(l, _)| l == layer) {
@@ -553,9 +550,6 @@ pub fn run(mut args: Args, ctx: &Ctx) -> Result<()> {
     args.threads.apply()?;
     args.targets.expand_lottie_globs();
     let styles = check_args(&args.render)?;
-    if args.parallel_files == 0 {
-        bail!("--parallel-files 0: expected at least 1");
-    }
     check_svg_frames(&args.targets.inputs)?;
     let layout = args.targets.layout()?;
     handle_interrupts();

@@ -52,7 +52,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
     let t0 = Instant::now();
     let params = args.flags.params()?;
     super::render::check_not_input(&args.masks, &args.output)?;
-    let anim = anim::load(&args.masks, &LoadOptions::default().scale(args.flags.target_scale()?))
+    let anim = anim::load(&args.masks, &LoadOptions::default().scale(args.flags.target_scale()))
         .with_context(|| format!("could not read the masks in '{}'", args.masks.display()))?;
     super::render::print_warnings(&args.masks, &anim);
     if !args.keyframe.is_empty() {

@@ -64,12 +64,20 @@ pub fn parse(path: &Path, text: &str) -> Result<Model> {
             "not a Lottie file: its top level is not a JSON object; re-export it with Bodymovin",
         ));
     }
-    let root: schema::Root = serde_json::from_str(text).map_err(|e| Error::Json {
-        path: path.to_path_buf(),
-        line: e.line(),
-        column: e.column(),
-        message: e.to_string(),
-        source: Some(Box::new(e)),
+    // A field of the wrong type is named by its JSON path where the typed reading's message
+    // would only give the line and column.
+    let root: schema::Root = serde_json::from_str(text).map_err(|e| {
+        let why = e.is_data().then(|| serde_json::from_str(text).ok().and_then(|v| schema::misshapen(&v))).flatten();
+        match why {
+            Some(why) => Error::animation(path, why),
+            None => Error::Json {
+                path: path.to_path_buf(),
+                line: e.line(),
+                column: e.column(),
+                message: e.to_string(),
+                source: Some(Box::new(e)),
+            },
+        }
     })?;
     let need = |v: Option<f64>, key: &str, what: &str| -> Result<f64> {
         match v {

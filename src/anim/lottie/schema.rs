@@ -64,6 +64,18 @@ fn num_or_written<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Result<f64, 
     Ok(Some(num_of(&v).ok_or_else(|| v.to_string())))
 }
 
+/// Like [`num`], but a present value that is not a number (nor `null`) fails the file: the
+/// fields whose wrong value would silently change the animation (its size, frame rate and
+/// frames, a layer's index, parent and timing). [`misshapen`] then names the field by its JSON
+/// path.
+fn strict_num<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    let v = Json::deserialize(d)?;
+    if v.is_null() {
+        return Ok(None);
+    }
+    num_of(&v).map(Some).ok_or_else(|| serde::de::Error::custom(format!("{} is not a number", brief(&v))))
+}
+
 fn text_of(v: &Json) -> Option<String> {
     match v {
         Json::String(s) => Some(s.clone()),
@@ -365,19 +377,19 @@ pub struct Root {
     #[serde(default, rename = "v")]
     _v: Option<IgnoredAny>,
     /// Frame rate.
-    #[serde(default, deserialize_with = "num")]
+    #[serde(default, deserialize_with = "strict_num")]
     pub fr: Option<f64>,
     /// First frame.
-    #[serde(default, deserialize_with = "num")]
+    #[serde(default, deserialize_with = "strict_num")]
     pub ip: Option<f64>,
     /// Frame after the last one.
-    #[serde(default, deserialize_with = "num")]
+    #[serde(default, deserialize_with = "strict_num")]
     pub op: Option<f64>,
     /// Canvas width.
-    #[serde(default, deserialize_with = "num")]
+    #[serde(default, deserialize_with = "strict_num")]
     pub w: Option<f64>,
     /// Canvas height.
-    #[serde(default, deserialize_with = "num")]
+    #[serde(default, deserialize_with = "strict_num")]
     pub h: Option<f64>,
     /// 3D flag.
     #[serde(default, deserialize_with = "num")]
@@ -420,22 +432,22 @@ pub struct Layer {
     #[serde(default, deserialize_with = "text")]
     pub nm: Option<String>,
     /// Index that `parent` and `tp` refer to.
-    #[serde(default, deserialize_with = "num")]
+    #[serde(default, deserialize_with = "strict_num")]
     pub ind: Option<f64>,
     /// `ind` of the parent layer.
-    #[serde(default, deserialize_with = "num")]
+    #[serde(default, deserialize_with = "strict_num")]
     pub parent: Option<f64>,
     /// In point (composition frames).
-    #[serde(default, deserialize_with = "num")]
+    #[serde(default, deserialize_with = "strict_num")]
     pub ip: Option<f64>,
     /// Out point (composition frames).
-    #[serde(default, deserialize_with = "num")]
+    #[serde(default, deserialize_with = "strict_num")]
     pub op: Option<f64>,
     /// Start time.
-    #[serde(default, deserialize_with = "num")]
+    #[serde(default, deserialize_with = "strict_num")]
     pub st: Option<f64>,
     /// Time stretch.
-    #[serde(default, deserialize_with = "num")]
+    #[serde(default, deserialize_with = "strict_num")]
     pub sr: Option<f64>,
     /// Hidden.
     #[serde(default, deserialize_with = "flag")]
@@ -460,7 +472,7 @@ pub struct Layer {
     #[serde(default, deserialize_with = "num")]
     pub td: Option<f64>,
     /// `ind` of this layer's matte source (newer exports).
-    #[serde(default, deserialize_with = "num")]
+    #[serde(default, deserialize_with = "strict_num")]
     pub tp: Option<f64>,
     /// Shape layer content.
     pub shapes: Option<Vec<ShapeEntry>>,
@@ -490,6 +502,90 @@ pub struct Layer {
     /// Layer styles present (not supported).
     #[serde(default, deserialize_with = "non_empty")]
     pub sy: bool,
+}
+
+/// A short description of a JSON value for a message: `"abc"`, `5`, `null`, `an object`, `a
+/// list` (long strings are cut).
+pub fn brief(v: &Json) -> String {
+    match v {
+        Json::Object(_) => "an object".into(),
+        Json::Array(_) => "a list".into(),
+        Json::String(s) if s.chars().count() > 40 => format!("\"{}…\"", s.chars().take(40).collect::<String>()),
+        _ => v.to_string(),
+    }
+}
+
+/// Why the JSON `root`, which the typed reading of this module refused, is not a Lottie file,
+/// by the JSON path of the first field of the wrong type (`layers[1].ks is 5, expected an
+/// object (the layer's transform)`); `None` when it finds nothing (the reader's own message is
+/// then the best there is).
+pub fn misshapen(root: &Json) -> Option<String> {
+    let Json::Object(root) = root else { return Some("the top level is not a JSON object".into()) };
+    let numbers = [
+        ("fr", "the frame rate"),
+        ("ip", "the first frame"),
+        ("op", "the end frame"),
+        ("w", "the canvas width"),
+        ("h", "the canvas height"),
+    ];
+    for (key, what) in numbers {
+        if let Some(v) = root.get(key).filter(|v| !v.is_null() && num_of(v).is_none()) {
+            return Some(format!("{key} is {}, expected a number ({what})", brief(v)));
+        }
+    }
+    if let Some(why) = root.get("layers").and_then(|l| misshapen_layers(l, "layers")) {
+        return Some(why);
+    }
+    match root.get("assets") {
+        None => None,
+        Some(Json::Array(assets)) => assets.iter().enumerate().find_map(|(i, a)| match a {
+            Json::Object(a) => a.get("layers").and_then(|l| misshapen_layers(l, &format!("assets[{i}].layers"))),
+            other => {
+                Some(format!("assets[{i}] is {}, expected an object (a precomposition or an image)", brief(other)))
+            }
+        }),
+        Some(other) => Some(format!("assets is {}, expected a list (of precompositions and images)", brief(other))),
+    }
+}
+
+/// [`misshapen`] for a list of layers at JSON path `at`.
+fn misshapen_layers(layers: &Json, at: &str) -> Option<String> {
+    let layers = match layers {
+        Json::Null => return None,
+        Json::Array(l) => l,
+        other => return Some(format!("{at} is {}, expected a list of layers", brief(other))),
+    };
+    let numbers = [
+        ("ind", "the layer's index, which 'parent' and 'tp' refer to"),
+        ("parent", "the 'ind' of the parent layer"),
+        ("tp", "the 'ind' of the track matte layer"),
+        ("ip", "the layer's in point"),
+        ("op", "the layer's out point"),
+        ("st", "the layer's start time"),
+        ("sr", "the layer's time stretch"),
+    ];
+    let parts = [
+        ("ks", "an object (the layer's transform)", Json::is_object as fn(&Json) -> bool),
+        ("shapes", "a list of shape items", Json::is_array),
+        ("masksProperties", "a list of masks", Json::is_array),
+    ];
+    layers.iter().enumerate().find_map(|(i, layer)| {
+        let at = format!("{at}[{i}]");
+        let Json::Object(layer) = layer else {
+            return Some(format!("{at} is {}, expected an object (a layer)", brief(layer)));
+        };
+        for (key, what) in numbers {
+            if let Some(v) = layer.get(key).filter(|v| !v.is_null() && num_of(v).is_none()) {
+                return Some(format!("{at}.{key} is {}, expected a number ({what})", brief(v)));
+            }
+        }
+        for (key, what, is) in parts {
+            if let Some(v) = layer.get(key).filter(|v| !v.is_null() && !is(v)) {
+                return Some(format!("{at}.{key} is {}, expected {what}", brief(v)));
+            }
+        }
+        None
+    })
 }
 
 /// A layer or group transform (a repeater's also has `so`/`eo`).
