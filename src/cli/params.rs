@@ -39,6 +39,10 @@ pub struct SynthFlags {
     /// current match (1 = plain PatchMatch, the paper; 2 keeps more texture) [default: 2].
     #[arg(long, value_name = "K")]
     pub coherence: Option<f32>,
+    /// Seam cost c: each neighbour whose match a match does not continue adds c to its error in
+    /// the search, so the field keeps larger pieces (0 = off, the paper) [default: 5].
+    #[arg(long, value_name = "C")]
+    pub seam_cost: Option<f32>,
     /// Temporal radius r of the occurrence boxes, frames [default: 5].
     #[arg(long, value_name = "R")]
     pub occ_radius: Option<usize>,
@@ -215,6 +219,9 @@ impl SynthFlags {
         if let Some(v) = self.coherence {
             b = b.coherence(v);
         }
+        if let Some(v) = self.seam_cost {
+            b = b.seam_cost(v);
+        }
         if let Some(v) = self.occ_radius {
             b = b.occ_radius(v);
         }
@@ -296,6 +303,7 @@ impl SynthFlags {
         push("lambda", self.lambda.map(|v| v.to_string()));
         push("contrast-balance", self.contrast_balance.map(|v| v.to_string()));
         push("coherence", self.coherence.map(|v| v.to_string()));
+        push("seam-cost", self.seam_cost.map(|v| v.to_string()));
         push("occ-radius", self.occ_radius.map(|v| v.to_string()));
         push("border-width", self.border_width.map(|v| v.to_string()));
         push("blur-sigma", self.blur_sigma.map(|v| v.to_string()));

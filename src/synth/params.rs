@@ -36,6 +36,7 @@ pub(crate) struct Weights {
     pub lambda: f32,
     pub coherence: f32,
     pub contrast_balance: f32,
+    pub seam_cost: f32,
 }
 
 impl Default for Weights {
@@ -48,6 +49,7 @@ impl Default for Weights {
             lambda: 4.0,
             coherence: 2.0,
             contrast_balance: 4.0,
+            seam_cost: 5.0,
         }
     }
 }
@@ -198,6 +200,10 @@ impl Params {
     /// Coherence factor κ of the random search (a random candidate must be κ× better).
     pub fn coherence(&self) -> f32 {
         self.weights.coherence
+    }
+    /// Seam cost: what each neighbour whose match a match does not continue adds to its error.
+    pub fn seam_cost(&self) -> f32 {
+        self.weights.seam_cost
     }
     /// Temporal radius r of the occurrence boxes.
     pub fn occ_radius(&self) -> usize {
@@ -498,6 +504,32 @@ impl ParamsBuilder {
     /// Default: 2; 1 = plain PatchMatch and the paper's merge.
     pub fn coherence(mut self, k: f32) -> Self {
         self.p.weights.coherence = k;
+        self
+    }
+
+    /// Seam cost c ≥ 0: in the search, a match pays c for each of its four neighbours whose
+    /// match it does not continue (another exemplar frame, or a source point more than ½ px
+    /// from the neighbour's moved one rotated step `M·e` on), on top of its patch error — a
+    /// smoothness term over the field, as graph-cut texture synthesis charges its seams. The
+    /// field keeps the patch errors alone; only the search's comparisons see the cost.
+    ///
+    /// Not in the paper. On a shape larger than the exemplar's paint the color term's optimum is
+    /// a field in pieces of one or two pixels, whatever the other weights: at the half-size
+    /// level of green-wash's still 512² ellipse 0.56 of the neighbouring matches continue each
+    /// other (0.99–1.00 on the exemplar's own masks), and each sweep lowers error and coherence
+    /// together. Up-scaled, every piece becomes a 2 × 2 block of the vote-only finest level, and
+    /// the paint shows a stipple of period 2 px — a darker pixel per block, power at that
+    /// period 5–9 times the mean where the exemplar's is at most 3.7 — over a mush without the
+    /// exemplar's mid-sized lobes (the 4–16 px bands 0.66–0.92 of the exemplar's contrast).
+    /// With c = 5 the half-size field is 0.75 coherent, the stipple is gone (green-wash still:
+    /// period-2 power 8.2, 5.2, 8.9 → 0.5, 0.6, 5.5 along x, y and the diagonal, the exemplar's
+    /// 0.5, 0.8, 3.7). c = 20 (0.85 coherent) copies pieces so large that they repeat visibly
+    /// around a still shape's rim. In units of the color term (a random pairing of pixels costs
+    /// about 2 per pixel, 50 per 5 × 5 patch).
+    ///
+    /// Default: 5; 0 = off, as in the paper.
+    pub fn seam_cost(mut self, c: f32) -> Self {
+        self.p.weights.seam_cost = c;
         self
     }
 
@@ -1079,6 +1111,7 @@ impl ParamsBuilder {
         vote_sigma("prev-sigma", p.schedule.prev_sigma)?;
         finite_nonneg("lambda", p.weights.lambda)?;
         finite_nonneg("contrast-balance", p.weights.contrast_balance)?;
+        finite_nonneg("seam-cost", p.weights.seam_cost)?;
         if !(p.weights.coherence.is_finite() && (1.0..=100.0).contains(&p.weights.coherence)) {
             return Err(Error::param("coherence", p.weights.coherence, "a number in 1..=100 (1 = plain PatchMatch)"));
         }

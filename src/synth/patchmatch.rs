@@ -246,13 +246,16 @@ impl<'a> Ctx<'a> {
         x: f32,
         y: f32,
         like: Option<bool>,
+        pen: f32,
         stats: &mut Stats,
     ) {
         let Some(s_dir) = self.check(seg, i, x, y) else { return };
-        self.try_valid(q, win, best, s_dir, i, x, y, like, stats);
+        self.try_valid(q, win, best, s_dir, i, x, y, like, pen, stats);
     }
 
-    /// [`Ctx::try_candidate`] for a center already checked, whose flow direction is `s_dir`.
+    /// [`Ctx::try_candidate`] for a center already checked, whose flow direction is `s_dir`;
+    /// `pen` (the candidate's seam cost) is added to its error, and `best.err` includes the
+    /// best's.
     #[inline]
     #[allow(clippy::too_many_arguments)]
     fn try_valid(
@@ -265,6 +268,7 @@ impl<'a> Ctx<'a> {
         x: f32,
         y: f32,
         like: Option<bool>,
+        pen: f32,
         stats: &mut Stats,
     ) {
         let (opts, n) = match like {
@@ -273,8 +277,8 @@ impl<'a> Ctx<'a> {
         };
         let coh = if like.is_none() { self.params.weights.coherence } else { 1.0 };
         let keep = |best: &mut Match, (c, s, flip): (f32, f32, bool), e: f32| {
-            if e * coh < best.err {
-                *best = Match { x, y, c, s, err: e, i: i as u16, flip, ok: true };
+            if e * coh + pen < best.err {
+                *best = Match { x, y, c, s, err: e + pen, i: i as u16, flip, ok: true };
             }
         };
         // A candidate equal to the best match has exactly its error (the error is a function of
@@ -291,7 +295,7 @@ impl<'a> Ctx<'a> {
         };
         let todo = [!same(opts[0]), n == 2 && !same(opts[1])];
         // A candidate must get below best.err / κ to win: its error stops being summed there.
-        let bound = best.err / coh;
+        let bound = (best.err - pen) / coh;
         if todo == [true, true] {
             // Both options of the rule (M and −M flipped) read the same 25 source pixels: one
             // pass gives both errors. The aligned one wins ties, as if tried first.
@@ -305,15 +309,18 @@ impl<'a> Ctx<'a> {
         for (&opt, _) in opts.iter().zip(todo).filter(|&(_, t)| t) {
             stats.evaluations += 1;
             let (c, s, flip) = opt;
-            let e = patch_error(self.src, self.feat, win, Center { i, cx: x, cy: y, c, s }, flip, best.err / coh);
+            let e =
+                patch_error(self.src, self.feat, win, Center { i, cx: x, cy: y, c, s }, flip, (best.err - pen) / coh);
             keep(best, opt, e);
         }
     }
 
     /// Improves the match of pixel q: its error recomputed, then propagation from the two
     /// already-visited neighbours (`n1`, `n2`, with the offsets `e1`, `e2` from them to q), then
-    /// random search. Returns the new match and the recomputed error of `cur` (∞ when `cur`
-    /// is not usable).
+    /// random search. Every candidate is judged by its patch error plus its seam cost against
+    /// all four neighbours (`ahead`: the two not yet visited, at −`e1` and −`e2`, as they were
+    /// before the sweep). Returns the new match (its error without the seams) and the
+    /// recomputed error of `cur` (∞ when `cur` is not usable).
     #[allow(clippy::too_many_arguments)]
     fn improve(
         &self,
@@ -323,15 +330,38 @@ impl<'a> Ctx<'a> {
         e1: (f32, f32),
         n2: Option<Match>,
         e2: (f32, f32),
+        ahead: [Option<Match>; 2],
         rng: &mut SplitMix64,
         stats: &mut Stats,
     ) -> (Match, f32) {
         let win = self.window(q);
         let seg = self.wanted_segment(q);
+        // The seam cost of a candidate (i, x, y): c per neighbour whose match it does not
+        // continue (`ParamsBuilder::seam_cost`); the comparisons below are of error plus seams.
+        let cost = self.params.weights.seam_cost;
+        let around = [(n1, e1), (n2, e2), (ahead[0], (-e1.0, -e1.1)), (ahead[1], (-e2.0, -e2.1))];
+        let seams = |i: u16, x: f32, y: f32| -> f32 {
+            if cost == 0.0 {
+                return 0.0;
+            }
+            let mut k = 0;
+            for (n, e) in &around {
+                let Some(n) = n else { continue };
+                if !n.ok {
+                    continue;
+                }
+                let (dx, dy) = n.rotate(e.0, e.1);
+                if !(n.i == i && (n.x + dx - x).abs() < 0.5 && (n.y + dy - y).abs() < 0.5) {
+                    k += 1;
+                }
+            }
+            cost * k as f32
+        };
         // The current match's error under this context (the target estimate and Ω change
         // between sweeps), from the window the search uses anyway.
         let mut best = Match { err: self.error_in(&win, &cur), ..cur };
         let refreshed = best.err;
+        best.err += seams(best.i, best.x, best.y);
         stats.evaluations += refreshed.is_finite() as u64;
         for (n, e) in [(n1, e1), (n2, e2)] {
             let Some(n) = n else { continue };
@@ -340,7 +370,9 @@ impl<'a> Ctx<'a> {
             }
             // Jacobian of the rotation: one step in the target is M·e in the source.
             let (dx, dy) = n.rotate(e.0, e.1);
-            self.try_candidate(q, seg, &win, &mut best, n.i as usize, n.x + dx, n.y + dy, Some(n.flip), stats);
+            let (cx, cy) = (n.x + dx, n.y + dy);
+            let pen = seams(n.i, cx, cy);
+            self.try_candidate(q, seg, &win, &mut best, n.i as usize, cx, cy, Some(n.flip), pen, stats);
         }
         // Random search (thesis §4.3): candidate k is drawn uniformly from α^k·(±w, ±h, ±l_S)
         // around v0, the match after propagation (as in PatchMatch), for k from 0 until the
@@ -391,7 +423,12 @@ impl<'a> Ctx<'a> {
             }
             let (idx, i, x, y) = cands[k];
             let s_dir = src.dirs[idx as usize];
-            self.try_valid(q, &win, &mut best, s_dir, i as usize, x as f32, y as f32, None, stats);
+            let pen = seams(i, x as f32, y as f32);
+            self.try_valid(q, &win, &mut best, s_dir, i as usize, x as f32, y as f32, None, pen, stats);
+        }
+        // The field keeps the patch error alone.
+        if best.ok && best.err.is_finite() {
+            best.err -= seams(best.i, best.x, best.y);
         }
         (best, refreshed)
     }
@@ -444,7 +481,8 @@ pub(crate) fn sweep(ctx: &Ctx, nnf: &mut Nnf, iter: usize) -> (Stats, f64) {
                         SplitMix64::keyed(&[ctx.keys[0], ctx.keys[1], ctx.keys[2], ctx.keys[3], iter as u64, q as u64]);
                     let cur = chunk[(y - y0) * w + x];
                     let e = step as f32;
-                    let (new, refreshed) = ctx.improve(q, cur, n1, (e, 0.0), n2, (0.0, e), &mut rng, &mut stats);
+                    let ahead = [get(chunk, xi + step, yi), get(chunk, xi, yi + step)];
+                    let (new, refreshed) = ctx.improve(q, cur, n1, (e, 0.0), n2, (0.0, e), ahead, &mut rng, &mut stats);
                     if refreshed.is_finite() {
                         energy += refreshed as f64;
                         scored += 1;
