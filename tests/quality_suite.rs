@@ -225,16 +225,21 @@ fn command_line_prints_the_table_and_writes_sheets_and_json() {
     assert_eq!(v["rows"].as_array().unwrap().len(), 1);
     assert_eq!(v["rows"][0]["frames"], 4);
     assert!(v["rows"][0]["summary"]["coverage_iou"].as_f64().unwrap() > 0.6);
-    // Mistakes are named.
-    for (args, needle) in [
-        (&["--target", "nope"][..], "--target 'nope': expected identity or one of still, growing"),
-        (&["--target", "still", "--target-scale", "2"][..], "use --scale with `quality`"),
-        (&["--target", "still", "--long-frames", "1"][..], "--long-frames"),
-        (&["--target", "still", "--lambda=-1"][..], "lambda"),
+    // Mistakes are named: exit 1 for a value read after parsing, 2 for a count outside the
+    // range its parser allows (a malformed command line, README *Robustness*).
+    for (args, needle, code) in [
+        (&["--target", "nope"][..], "--target 'nope': expected identity or one of still, growing", 1),
+        (&["--target", "still", "--target-scale", "2"][..], "use --scale with `quality`", 1),
+        (
+            &["--target", "still", "--long-frames", "1"][..],
+            "'--long-frames <LONG_FRAMES>': expected a whole number from 2",
+            2,
+        ),
+        (&["--target", "still", "--lambda=-1"][..], "lambda", 1),
     ] {
         let o = run(args);
         let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert_eq!(o.status.code(), Some(code), "{args:?}: {err}");
         assert!(err.contains(needle) && !err.contains("panicked"), "{args:?}: {err}");
     }
     let _ = std::fs::remove_dir_all(&dir);
