@@ -10,10 +10,20 @@ fn scratch(name: &str) -> PathBuf {
     cli_support::scratch("exit", name)
 }
 
+/// The bundled demo animation's path, for a command line.
+fn demo() -> String {
+    root().join("fixtures/demo/waving.json").to_str().unwrap().to_string()
+}
+
+/// A fresh scratch folder's path ([`scratch`]), for a command line.
+fn scratch_arg(name: &str) -> String {
+    scratch(name).to_str().unwrap().to_string()
+}
+
 #[test]
 fn done_error_and_usage_have_their_codes() {
-    let demo = root().join("fixtures/demo/waving.json");
-    let demo = demo.to_str().unwrap();
+    let demo = demo();
+    let demo = demo.as_str();
     assert_eq!(run(&["inspect", demo]).status.code(), Some(0));
     assert_eq!(run(&["--version"]).status.code(), Some(0));
     // Errors: the input, a value checked against it.
@@ -36,24 +46,14 @@ fn done_error_and_usage_have_their_codes() {
 /// 2, `bench --frames 0` ran, and the message of each range came from another place.)
 #[test]
 fn out_of_range_counts_are_usage_errors_that_name_the_option() {
-    let demo = root().join("fixtures/demo/waving.json");
-    let demo = demo.to_str().unwrap();
-    let out = scratch("counts");
-    let out = out.to_str().unwrap();
-    let render = |extra: &[&'static str]| -> Vec<String> {
-        [&["render", demo, "-o", out][..], extra].concat().iter().map(|s| s.to_string()).collect()
-    };
-    let cmd = |args: &[&str]| -> Vec<String> { args.iter().map(|s| s.to_string()).collect() };
-    let plain = |cmd_: &str, extra: &[&str]| -> Vec<String> {
-        let mut v = vec![cmd_.to_string()];
-        v.extend(extra.iter().map(|s| s.to_string()));
-        v
-    };
-    let layer = |extra: &[&str]| {
-        let mut v = cmd(&["render-layer", demo, "-o", out, "--layer", "1"]);
-        v.extend(extra.iter().map(|s| s.to_string()));
-        v
-    };
+    let (demo, out) = (demo(), scratch_arg("counts"));
+    let (demo, out) = (demo.as_str(), out.as_str());
+    // A command line: its first words, then the case's.
+    let line =
+        |head: &[&str], extra: &[&str]| -> Vec<String> { head.iter().chain(extra).map(|s| s.to_string()).collect() };
+    let render = |extra: &[&str]| line(&["render", demo, "-o", out], extra);
+    let layer = |extra: &[&str]| line(&["render-layer", demo, "-o", out, "--layer", "1"], extra);
+    let plain = |command: &str, extra: &[&str]| line(&[command], extra);
     // (command line, the option as clap names it, the range in the message)
     let cases: Vec<(Vec<String>, &str, &str)> = vec![
         (render(&["--threads", "0"]), "'--threads <N>'", "from 1 to 1024"),
@@ -133,8 +133,7 @@ fn out_of_range_counts_are_usage_errors_that_name_the_option() {
 
 #[test]
 fn frames_past_the_end_are_said() {
-    let demo = root().join("fixtures/demo/waving.json");
-    let o = run(&["inspect", demo.to_str().unwrap(), "--frames", "47..1000000"]);
+    let o = run(&["inspect", &demo(), "--frames", "47..1000000"]);
     assert_eq!(o.status.code(), Some(0));
     assert!(
         stderr(&o).contains("warning: --frames '47..1000000': the input has only 48 frames; using 47..48"),
@@ -146,11 +145,11 @@ fn frames_past_the_end_are_said() {
 #[test]
 fn limits_are_errors_before_any_work() {
     let tmp = scratch("limits");
-    let demo = root().join("fixtures/demo/waving.json");
+    let demo = demo();
     // A render too large for the memory limit: refused at once, nothing created.
     let out = tmp.join("big");
     let o = bin()
-        .args(["render", demo.to_str().unwrap(), "-o", out.to_str().unwrap(), "--scale", "16"])
+        .args(["render", &demo, "-o", out.to_str().unwrap(), "--scale", "16"])
         .env_remove("FLUIDYMATION_MEMORY_LIMIT")
         .output()
         .unwrap();
@@ -161,7 +160,7 @@ fn limits_are_errors_before_any_work() {
     // inspect's previews of that canvas (about 3.8 GB) over a 1 GB limit: refused the same way.
     let masks = tmp.join("masks");
     let o = bin()
-        .args(["inspect", demo.to_str().unwrap(), "--masks", masks.to_str().unwrap(), "--scale", "16", "--frames", "1"])
+        .args(["inspect", &demo, "--masks", masks.to_str().unwrap(), "--scale", "16", "--frames", "1"])
         .env("FLUIDYMATION_MEMORY_LIMIT", "1G")
         .output()
         .unwrap();
@@ -198,10 +197,8 @@ fn limits_are_errors_before_any_work() {
 
 #[test]
 fn negative_and_huge_numbers_are_named_not_taken_for_flags() {
-    let demo = root().join("fixtures/demo/waving.json");
-    let demo = demo.to_str().unwrap();
-    let out = scratch("negative");
-    let out = out.to_str().unwrap();
+    let (demo, out) = (demo(), scratch_arg("negative"));
+    let (demo, out) = (demo.as_str(), out.as_str());
     // Each refused with the option's own message (before: "unexpected argument '-1'" and a tip
     // that turned the number into a second input).
     for (args, says) in [

@@ -528,10 +528,8 @@ pub fn misshapen(root: &Json) -> Option<String> {
         ("w", "the canvas width"),
         ("h", "the canvas height"),
     ];
-    for (key, what) in numbers {
-        if let Some(v) = root.get(key).filter(|v| !v.is_null() && num_of(v).is_none()) {
-            return Some(format!("{key} is {}, expected a number ({what})", brief(v)));
-        }
+    if let Some(why) = wrong_number(root, &numbers, "") {
+        return Some(why);
     }
     if let Some(why) = root.get("layers").and_then(|l| misshapen_layers(l, "layers")) {
         return Some(why);
@@ -546,6 +544,16 @@ pub fn misshapen(root: &Json) -> Option<String> {
         }),
         Some(other) => Some(format!("assets is {}, expected a list (of precompositions and images)", brief(other))),
     }
+}
+
+/// The first of the fields `keys` (with what each is, for the message) of `object` that is
+/// present but neither a number nor `null`, named with the JSON path prefix `at`:
+/// `layers[0].ind is "q", expected a number (…)`.
+fn wrong_number(object: &serde_json::Map<String, Json>, keys: &[(&str, &str)], at: &str) -> Option<String> {
+    keys.iter().find_map(|&(key, what)| {
+        let v = object.get(key).filter(|v| !v.is_null() && num_of(v).is_none())?;
+        Some(format!("{at}{key} is {}, expected a number ({what})", brief(v)))
+    })
 }
 
 /// [`misshapen`] for a list of layers at JSON path `at`.
@@ -574,10 +582,8 @@ fn misshapen_layers(layers: &Json, at: &str) -> Option<String> {
         let Json::Object(layer) = layer else {
             return Some(format!("{at} is {}, expected an object (a layer)", brief(layer)));
         };
-        for (key, what) in numbers {
-            if let Some(v) = layer.get(key).filter(|v| !v.is_null() && num_of(v).is_none()) {
-                return Some(format!("{at}.{key} is {}, expected a number ({what})", brief(v)));
-            }
+        if let Some(why) = wrong_number(layer, &numbers, &format!("{at}.")) {
+            return Some(why);
         }
         for (key, what, is) in parts {
             if let Some(v) = layer.get(key).filter(|v| !v.is_null() && !is(v)) {
