@@ -90,9 +90,15 @@ fn a_background_layer_has_no_frame_around_the_canvas() {
 /// −0.008, +0.027, +0.001 — rose-burst's had crept up since, unnoticed inside the floor; with
 /// it (the default 5) −0.003, +0.034, −0.004, the rim 0.646, 0.835, 0.787. Rose-burst's is a
 /// gradient over the 40 px next to the canvas (luma 0.859 at 0–6 px, 0.816 at 36–48 px with
-/// `synth`), which `--dist-weight 0` flattens; not yet explained (README, *Known
-/// limitations*). Floor: within ±0.045 (the worst measured, 0.034, plus about 0.01); the
-/// paper-colored padding this test was written against (+0.053, −0.087) still fails it.
+/// `synth`). It is the interior's own slow variation at this seed, not the canvas (seventh
+/// session of 2026-12-07, `synth` 8 frames, the same measure): seeds 1–4 give +0.030,
+/// +0.015, −0.007, +0.006 (mean +0.011); measured the same way from the centre column of a
+/// disc of the same size in the middle of the canvas, which touches no edge, +0.010, +0.003,
+/// +0.011, +0.017 (mean +0.010). Without the tone match the same seed shows a dark vertical
+/// band 30–48 px from the canvas (luma 0.71 against 0.83 at the canvas) and another further
+/// in: streaks of the interior, also seen in the centred disc. Floor: within ±0.045 (the
+/// worst measured, 0.034, plus about 0.01); the paper-colored padding this test was written
+/// against (+0.053, −0.087) still fails it.
 #[test]
 fn a_shape_leaving_the_canvas_has_no_edge_there() {
     let inside = |x: usize, y: usize| RADIUS - (x as f32).hypot(y as f32 - SIDE as f32 / 2.0);
