@@ -338,24 +338,32 @@ impl<'a> Ctx<'a> {
         let seg = self.wanted_segment(q);
         // The seam cost of a candidate (i, x, y): c per neighbour whose match it does not
         // continue (`ParamsBuilder::seam_cost`); the comparisons below are of error plus seams.
+        // The center each usable neighbour's match continues to at q, (i, x + M·e, y + M·e),
+        // is computed once here; a candidate counts the ones it is not within half a pixel of
+        // (branch-free: the slots of missing neighbours hold NaN, which no candidate is near).
         let cost = self.params.weights.seam_cost;
         let around = [(n1, e1), (n2, e2), (ahead[0], (-e1.0, -e1.1)), (ahead[1], (-e2.0, -e2.1))];
+        let conts = around.map(|(n, e)| {
+            n.filter(|n| n.ok).map(|n| {
+                let (dx, dy) = n.rotate(e.0, e.1);
+                (n.i, n.x + dx, n.y + dy)
+            })
+        });
+        let (ci, cx, cy) = (
+            conts.map(|c| c.map_or(0, |c| c.0)),
+            conts.map(|c| c.map_or(f32::NAN, |c| c.1)),
+            conts.map(|c| c.map_or(f32::NAN, |c| c.2)),
+        );
+        let live = conts.iter().flatten().count() as u32;
         let seams = |i: u16, x: f32, y: f32| -> f32 {
             if cost == 0.0 {
                 return 0.0;
             }
-            let mut k = 0;
-            for (n, e) in &around {
-                let Some(n) = n else { continue };
-                if !n.ok {
-                    continue;
-                }
-                let (dx, dy) = n.rotate(e.0, e.1);
-                if !(n.i == i && (n.x + dx - x).abs() < 0.5 && (n.y + dy - y).abs() < 0.5) {
-                    k += 1;
-                }
+            let mut near = 0;
+            for k in 0..4 {
+                near += ((ci[k] == i) & ((cx[k] - x).abs() < 0.5) & ((cy[k] - y).abs() < 0.5)) as u32;
             }
-            cost * k as f32
+            cost * (live - near) as f32
         };
         // The current match's error under this context (the target estimate and Ω change
         // between sweeps), from the window the search uses anyway.
@@ -363,16 +371,11 @@ impl<'a> Ctx<'a> {
         let refreshed = best.err;
         best.err += seams(best.i, best.x, best.y);
         stats.evaluations += refreshed.is_finite() as u64;
-        for (n, e) in [(n1, e1), (n2, e2)] {
-            let Some(n) = n else { continue };
-            if !n.ok {
-                continue;
-            }
-            // Jacobian of the rotation: one step in the target is M·e in the source.
-            let (dx, dy) = n.rotate(e.0, e.1);
-            let (cx, cy) = (n.x + dx, n.y + dy);
-            let pen = seams(n.i, cx, cy);
-            self.try_candidate(q, seg, &win, &mut best, n.i as usize, cx, cy, Some(n.flip), pen, stats);
+        // Jacobian of the rotation: one step in the target is M·e in the source (`conts`).
+        for (n, cont) in [n1, n2].into_iter().zip(conts) {
+            let (Some(n), Some((i, cx, cy))) = (n, cont) else { continue };
+            let pen = seams(i, cx, cy);
+            self.try_candidate(q, seg, &win, &mut best, i as usize, cx, cy, Some(n.flip), pen, stats);
         }
         // Random search (thesis §4.3): candidate k is drawn uniformly from α^k·(±w, ±h, ±l_S)
         // around v0, the match after propagation (as in PatchMatch), for k from 0 until the

@@ -529,13 +529,36 @@ fn settle(f: &Nnf, active: &[bool]) -> Nnf {
             }
         }
         if n >= 3 {
-            (o.x, o.y) = (
-                *xs[..n].select_nth_unstable_by(n / 2, f32::total_cmp).1,
-                *ys[..n].select_nth_unstable_by(n / 2, f32::total_cmp).1,
-            );
+            (o.x, o.y) = (median(&xs[..n]), median(&ys[..n]));
         }
     });
     out
+}
+
+/// The element of rank `len / 2` of at most 9 values in the order of [`f32::total_cmp`]: the one
+/// with at most `len / 2` keys below its own and more than `len / 2` at or below it, the keys
+/// being the integers `total_cmp` compares (counted without branches: on so few values, faster
+/// than a selection's data-dependent branches).
+#[inline]
+fn median(v: &[f32]) -> f32 {
+    // The key is its own inverse: flipping the magnitude bits of the negative values.
+    let key = |bits: i32| bits ^ (((bits >> 31) as u32) >> 1) as i32;
+    let mut keys = [0i32; 9];
+    for (k, x) in keys.iter_mut().zip(v) {
+        *k = key(x.to_bits() as i32);
+    }
+    let (keys, mid) = (&keys[..v.len()], v.len() / 2);
+    for &kj in keys {
+        let (mut below, mut at_or_below) = (0, 0);
+        for &k in keys {
+            below += (k < kj) as usize;
+            at_or_below += (k <= kj) as usize;
+        }
+        if below <= mid && mid < at_or_below {
+            return f32::from_bits(key(kj) as u32);
+        }
+    }
+    unreachable!("some key has the middle rank")
 }
 
 /// The source distance field of frame i at (x, y), bilinear, and its gradient (central
@@ -629,6 +652,23 @@ pub(crate) fn mask_flags(tgt: &TargetLevel) -> Vec<bool> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The median is the element `select_nth_unstable_by(len / 2, f32::total_cmp)` picks, bit
+    /// for bit: signed zeros, negative values, repeats.
+    #[test]
+    fn median_is_the_total_order_median() {
+        let mut rng = crate::rng::SplitMix64::keyed(&[11]);
+        let pool = [0.0, -0.0, 1.5, -1.5, 2.25, -3.0, 1e-30, -1e-30, 7.0, 100.0];
+        for _ in 0..5000 {
+            let n = 3 + rng.below(7);
+            let v: Vec<f32> = (0..n)
+                .map(|_| if rng.next_f32() < 0.5 { pool[rng.below(pool.len())] } else { rng.range(-50.0, 50.0) })
+                .collect();
+            let mut sel = v.clone();
+            let want = *sel.select_nth_unstable_by(n / 2, f32::total_cmp).1;
+            assert_eq!(median(&v).to_bits(), want.to_bits(), "{v:?}");
+        }
+    }
 
     #[test]
     fn modulation_falls_with_mismatch() {
