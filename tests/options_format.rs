@@ -76,6 +76,7 @@ fn eval_options_json() {
         [
             "background",
             "coherence",
+            "depth_stretch",
             "exemplar_scale",
             "exemplar_step",
             "interior_margin",
@@ -91,6 +92,7 @@ fn eval_options_json() {
     assert_eq!(v["exemplar_step"], 2);
     assert_eq!(v["exemplar_scale"], serde_json::Value::Null);
     assert_eq!(v["rim"]["band"], 3.0);
+    assert_eq!(v["depth_stretch"], true);
     assert_eq!(serde_json::from_value::<EvalOptions>(v).unwrap(), opts);
     let partial: EvalOptions = serde_json::from_str(r#"{"paint_threshold": 0.2}"#).unwrap();
     assert_eq!(partial, EvalOptions::default().paint_threshold(0.2));

@@ -53,6 +53,11 @@ pub struct Args {
     /// Resize the exemplar first, as `synth --src-scale` [default: the exemplar's scale].
     #[arg(long, value_name = "FACTOR")]
     pub src_scale: Option<f32>,
+    /// Compare the palette of every pixel with the exemplar's at its own distance from the
+    /// edge; by default a shape deeper than the exemplar's paint is compared at the exemplar's
+    /// depths stretched to it, as the synthesis paints it (see `--without depth-stretch`).
+    #[arg(long)]
+    pub own_depths: bool,
     /// Output patches sampled for the nearest-neighbour distance.
     #[arg(long, default_value_t = 2048, value_parser = super::params::count(1, usize::MAX))]
     pub patch_samples: usize,
@@ -109,6 +114,7 @@ pub fn run(args: Args, ctx: &Ctx) -> anyhow::Result<()> {
     let mut options = EvalOptions::default()
         .interior_margin(args.interior_margin)
         .paint_threshold(args.paint_threshold)
+        .depth_stretch(!args.own_depths)
         .rim(eval::RimParams { band: args.rim_band, interior: args.rim_interior, ..defaults.rim })
         .patches(eval::PatchParams { samples: args.patch_samples, seed: args.seed, ..defaults.patches })
         .motion(eval::MotionParams {

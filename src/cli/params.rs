@@ -141,7 +141,9 @@ pub struct SynthFlags {
     /// stretched, a growing shape's interior grows calmer), tone-match (the output
     /// keeps the density of the paint its patches were stitched from: paler than the
     /// exemplar at the same distance from the edge on shapes larger than its paint),
-    /// repaint-first (the first frame is painted once, from a random field: its rim band is
+    /// depth-stretch (a shape deeper than the exemplar's paint takes the tones of the
+    /// exemplar's calm, pale middle everywhere deeper than the paint reaches, as before
+    /// 2026-12-07), repaint-first (the first frame is painted once, from a random field: its rim band is
     /// rough and the paint jumps between frames 1 and 2), turn (a still's patches are never
     /// turned: on a turning shape the carried paint's pieces turn while the patches they
     /// sample do not, and the paint blurs over a long animation).
@@ -172,6 +174,7 @@ pub enum Part {
     GrainPhase,
     GrainMatch,
     ToneMatch,
+    DepthStretch,
     RepaintFirst,
     Turn,
 }
@@ -278,6 +281,7 @@ impl SynthFlags {
                 Part::GrainPhase => b.grain_phase(false),
                 Part::GrainMatch => b.grain_match(false),
                 Part::ToneMatch => b.tone_match(false),
+                Part::DepthStretch => b.depth_stretch(false),
                 Part::RepaintFirst => b.repaint_first(false),
                 Part::Turn => b.turn(false),
             };
@@ -527,7 +531,7 @@ mod tests {
         let off =
             off.settle(false).receding_hold(false).aging(false).pace(false).full_carry(false).contrast_balance(0.0);
         let off = off.travel_hold(false).grain_phase(false).grain_match(false);
-        let off = off.tone_match(false).repaint_first(false).turn(false).build().unwrap();
+        let off = off.tone_match(false).depth_stretch(false).repaint_first(false).turn(false).build().unwrap();
         assert_eq!(p, off);
     }
 

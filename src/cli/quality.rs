@@ -37,6 +37,11 @@ pub struct Args {
     /// Also write the report as JSON.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
+    /// Measure the palette of every pixel against the exemplar's at its own distance from the
+    /// edge (as `eval --own-depths`); by default a shape deeper than the exemplar's paint is
+    /// measured at the exemplar's depths stretched to it.
+    #[arg(long)]
+    pub own_depths: bool,
     /// Runs painted at the same time, 1 to 64 (each uses every thread for its own stages).
     #[arg(long, default_value_t = 2, value_parser = count(1, 64))]
     pub jobs: usize,
@@ -82,6 +87,7 @@ pub fn run(args: Args, ctx: &Ctx) -> Result<()> {
         .long_frames(args.long_frames)
         .window(args.window)
         .params(params)
+        .eval(fluidymation::eval::EvalOptions::default().depth_stretch(!args.own_depths))
         .jobs(args.jobs);
     if let Some(dir) = &args.output {
         options = options.sheets(dir);

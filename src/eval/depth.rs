@@ -10,6 +10,8 @@
 //! values of contrast and palette are therefore the exemplar's at the output's own depths:
 //! per 2-px bin of distance from the edge, weighted by how many output pixels fall in it;
 //! depths the exemplar never reaches take its deepest bin with at least [`MIN_BIN_PIXELS`].
+//! For the palette, a part deeper than the exemplar's paint counts its pixels at the
+//! exemplar's depths stretched to it ([`super::EvalOptions::depth_stretch`], [`paint_depth`]).
 
 use super::{ColorHistogram, Mean, Shape};
 use crate::img::{Mask, Plane, Rgb};
@@ -27,15 +29,24 @@ pub(crate) fn depth_bin(d: f32) -> usize {
     ((d.max(0.0) / DEPTH_BIN) as usize).min(DEPTH_BINS - 1)
 }
 
-/// Pixels of `region` per depth bin of `shape`.
-pub(crate) fn region_bins(shape: &Shape, region: &Mask) -> Vec<u64> {
+/// Pixels of `region` per depth bin of `depth` (a shape's matched depths).
+pub(crate) fn region_bins(depth: &Plane<f32>, region: &Mask) -> Vec<u64> {
     let mut n = vec![0u64; DEPTH_BINS];
-    for (&d, &inside) in shape.sdf.data().iter().zip(region.data()) {
+    for (&d, &inside) in depth.data().iter().zip(region.data()) {
         if inside {
             n[depth_bin(d)] += 1;
         }
     }
     n
+}
+
+/// The depth of a paint: the deepest pixel of any of its frames (0 for no paint). A frame of
+/// the exemplar is never deeper, so the exemplar measured against itself is measured at its
+/// own depths.
+pub(crate) fn paint_depth(shapes: &[Shape]) -> f32 {
+    let deepest =
+        |s: &Shape| s.sdf.data().iter().zip(s.mask.data()).filter(|(_, m)| **m).map(|(&d, _)| d).fold(0.0, f32::max);
+    shapes.iter().map(deepest).fold(0.0, f32::max)
 }
 
 /// The exemplar's contrast and colors per depth bin.

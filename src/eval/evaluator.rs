@@ -4,7 +4,7 @@
 use super::coherence::{incoherent_change_binned, pair_residual};
 use super::contrast::local_contrast_binned;
 use super::coverage::{COVER_BINS, PaintedProfile, coverage_from_counts, mask_bins};
-use super::depth::{DEPTH_BINS, DepthProfile, depth_bin, region_bins};
+use super::depth::{DEPTH_BINS, DepthProfile, depth_bin, paint_depth, region_bins};
 use super::flow::{motion_pair_mean, motion_pair_mean_with};
 use super::patches::frame_patch_mean;
 use super::temporal::frame_change_mean;
@@ -37,6 +37,9 @@ fn resample<T: Blend>(planes: &[Plane<T>], step: usize, scale: f32) -> Vec<Plane
 /// by a ratio.
 pub struct Reference {
     name: String,
+    /// The border width `b` and the paint's depth `R` at which a deeper target is measured
+    /// ([`EvalOptions::depth_stretch`]); `None` = at its own depths.
+    stretch: Option<(f32, f32)>,
     step: usize,
     scale: f32,
     paper: Rgb,
@@ -85,8 +88,10 @@ impl Reference {
         let contrast = contrast.value();
         let paper = exemplar.paper();
         let painted = PaintedProfile::new(&frames, &shapes, paper, options.paint_threshold);
+        let stretch = options.depth_stretch.then(|| (exemplar.meta.border_width * scale, paint_depth(&shapes)));
         Ok(Reference {
             name: exemplar.meta.name.clone(),
+            stretch,
             step,
             scale,
             paper,
@@ -117,6 +122,16 @@ impl Reference {
     /// Its paper color (from its metadata): outputs with alpha are composited over it.
     pub fn paper(&self) -> Rgb {
         self.paper
+    }
+
+    /// The depths at which `shape`'s pixels are compared with the exemplar's
+    /// ([`EvalOptions::depth_stretch`]): its signed distances, a part deeper than the
+    /// exemplar's paint stretched onto the paint's depths.
+    pub(crate) fn matched_depths(&self, shape: &Shape) -> Plane<f32> {
+        match self.stretch {
+            Some((band, reach)) => crate::guide::stretched_depths(&shape.sdf, &shape.mask, band, |_| Some(reach)),
+            None => shape.sdf.clone(),
+        }
     }
 
     /// Its own edge darkening ([`super::edge_darkening`], mean over its frames).
@@ -296,7 +311,8 @@ impl<'a> Evaluator<'a> {
                 FrameTotals {
                     coverage: intersection_union(&painted_mask(&output[i], &self.painted), &shape.mask),
                     mask_bins: mask_bins(shape),
-                    region_bins: region_bins(shape, &region),
+                    // The palette's depths ([`EvalOptions::depth_stretch`]).
+                    region_bins: region_bins(&self.reference.matched_depths(shape), &region),
                     contrast_bins,
                     hist: ColorHistogram::of_region(&rgb[i], &region),
                     patches: frame_patch_mean(

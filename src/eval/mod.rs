@@ -33,7 +33,12 @@
 //! exemplar's paint at every depth would score a contrast well below 1 and a palette distance
 //! well above 0. So the exemplar's contrast and colors are taken at the output's own depths:
 //! per 2-px bin of distance from the edge, weighted by the output's pixels in it (depths the
-//! exemplar never reaches take its deepest bin with at least 200 pixels). The whole-interior
+//! exemplar never reaches take its deepest bin with at least 200 pixels). The palette of a part
+//! deeper than the exemplar's paint is taken at the exemplar's depths stretched to it, as the
+//! synthesis paints it ([`EvalOptions::depth_stretch`]; the band within the exemplar's border
+//! width of the edge at its own depths): its middle against the exemplar's middle, the depths
+//! between against the depths between. The contrast stays at the output's own depths: it is
+//! the paint's grain and blotches, which keep their size on a larger shape. The whole-interior
 //! values stay in the [`Summary`] (`contrast_ratio_whole`, `palette_distance_whole`).
 //!
 //! [`evaluate`] measures a sequence held in memory; an [`Evaluator`] measures one pushed a
@@ -203,6 +208,14 @@ pub struct EvalOptions {
     /// Resize the exemplar by this factor first, as the synthesis does with `--src-scale`;
     /// `None` takes the exemplar's recommended `scale`. Default: `None`.
     pub exemplar_scale: Option<f32>,
+    /// Measure the palette of a target deeper than the exemplar's paint at the exemplar's
+    /// depths stretched to it, as the synthesis reads it
+    /// ([`crate::synth::ParamsBuilder::depth_stretch`]): within the exemplar's border width
+    /// `b` of the edge at its own depths, deeper at `b + (d − b)·(R − b)/(D − b)` for a part
+    /// whose deepest pixel lies at `D` beyond `R`, the deepest pixel of any exemplar frame.
+    /// `false` measures every pixel at its own depth (the deepest well-sampled depth of the
+    /// exemplar standing for every depth beyond). Default: `true`.
+    pub depth_stretch: bool,
 }
 
 impl Default for EvalOptions {
@@ -218,6 +231,7 @@ impl Default for EvalOptions {
             paint_threshold: 0.1,
             exemplar_step: None,
             exemplar_scale: None,
+            depth_stretch: true,
         }
     }
 }
@@ -284,6 +298,12 @@ impl EvalOptions {
     /// Sets [`EvalOptions::exemplar_scale`]. Default: the exemplar's recommended `scale`.
     pub fn exemplar_scale(mut self, scale: f32) -> Self {
         self.exemplar_scale = Some(scale);
+        self
+    }
+
+    /// Sets [`EvalOptions::depth_stretch`]. Default: `true`.
+    pub fn depth_stretch(mut self, on: bool) -> Self {
+        self.depth_stretch = on;
         self
     }
 

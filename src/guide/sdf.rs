@@ -27,6 +27,42 @@ pub fn no_boundary_distance(w: usize, h: usize) -> f32 {
     ((w * w + h * h) as f64).sqrt() as f32
 }
 
+/// The depths at which a shape reads a paint whose own depth is `reach` (not in the papers):
+/// the signed distances `dist` of `mask` with each 4-connected part deeper than its paint
+/// stretched onto the paint's depths.
+///
+/// Paint keeps its edge as it spreads, so the band within `band` pixels of the edge keeps its
+/// depths. Deeper than that, a part whose deepest pixel lies at `D` greater than `R =
+/// reach(part)` (the part's pixels as indices into `dist`; `None` leaves the part as it is)
+/// reads `d' = b + (d − b)·(R − b)/(D − b)`: its middle is the paint's middle and the depths
+/// between are the paint's depths between, as the same paint laid over a larger area would
+/// be. Parts no deeper than their paint, and paint no deeper than the band, keep their
+/// depths; so does everything outside `mask`.
+pub(crate) fn stretched_depths(
+    dist: &Plane<f32>,
+    mask: &Mask,
+    band: f32,
+    mut reach: impl FnMut(&[usize]) -> Option<f32>,
+) -> Plane<f32> {
+    let (w, h) = mask.size();
+    let mut out = dist.clone();
+    for (part, _) in crate::img::components(mask.data(), w, h, true) {
+        let deepest = part.iter().map(|&q| dist.data()[q]).fold(0.0, f32::max);
+        let Some(r) = reach(&part) else { continue };
+        if deepest <= r || r <= band {
+            continue;
+        }
+        let k = (r - band) / (deepest - band);
+        let data = out.data_mut();
+        for &q in &part {
+            if data[q] > band {
+                data[q] = band + (data[q] - band) * k;
+            }
+        }
+    }
+    out
+}
+
 /// Width of the column strips of phase 1.
 const STRIP: usize = 64;
 
@@ -286,5 +322,31 @@ mod tests {
         let d = sdf(&mask);
         assert!((d.get(0, 19) - (0.5 - ((140.0f64 * 140.0 + 16.0 * 16.0).sqrt() as f32))).abs() < 1e-4);
         assert_eq!(d.get(140, 3), 0.5);
+    }
+
+    #[test]
+    fn a_part_deeper_than_its_paint_is_stretched_onto_it() {
+        // A disc 40 px deep and one 10 px deep; the paint reaches 20 px, its band is 5 px.
+        let mask = Plane::from_fn(140, 90, |x, y| {
+            let d = |cx: f32, cy: f32| ((x as f32 - cx).powi(2) + (y as f32 - cy).powi(2)).sqrt();
+            d(45.0, 45.0) < 40.0 || d(115.0, 45.0) < 10.0
+        });
+        let dist = sdf(&mask);
+        let out = stretched_depths(&dist, &mask, 5.0, |_| Some(20.0));
+        // The deep disc's middle reads the paint's deepest, its band its own depths, and the
+        // depths between keep their order.
+        assert!((out.get(45, 45) - 20.0).abs() < 1e-3, "{}", out.get(45, 45));
+        for (x, y) in [(45, 45), (25, 45), (12, 45), (8, 45), (6, 45), (45, 80)] {
+            let (d, o) = (dist.get(x, y), out.get(x, y));
+            let want = if d <= 5.0 { d } else { 5.0 + (d - 5.0) * 15.0 / (dist.get(45, 45) - 5.0) };
+            assert!((o - want).abs() < 1e-4, "({x}, {y}): {d} -> {o}, expected {want}");
+        }
+        // The shallow disc, no deeper than the paint, and the paper keep theirs.
+        for (x, y) in [(115, 45), (110, 45), (0, 0), (100, 10)] {
+            assert_eq!(out.get(x, y), dist.get(x, y));
+        }
+        // No paint depth, or one within the band: nothing moves.
+        assert_eq!(stretched_depths(&dist, &mask, 5.0, |_| None), dist);
+        assert_eq!(stretched_depths(&dist, &mask, 5.0, |_| Some(4.0)), dist);
     }
 }

@@ -121,6 +121,34 @@ pub(crate) fn for_each_neighbour4(i: usize, w: usize, h: usize, mut f: impl FnMu
     }
 }
 
+/// The 4-connected components of the pixels of `m` equal to `value`, each with whether it
+/// touches the frame edge.
+pub(crate) fn components(m: &[bool], w: usize, h: usize, value: bool) -> impl Iterator<Item = (Vec<usize>, bool)> + '_ {
+    let mut seen = vec![false; w * h];
+    (0..w * h).filter_map(move |start| {
+        if seen[start] || m[start] != value {
+            return None;
+        }
+        let mut comp = vec![start];
+        seen[start] = true;
+        let mut head = 0;
+        let mut touches_edge = false;
+        while head < comp.len() {
+            let i = comp[head];
+            head += 1;
+            let (x, y) = (i % w, i / w);
+            touches_edge |= x == 0 || y == 0 || x == w - 1 || y == h - 1;
+            for_each_neighbour4(i, w, h, |j| {
+                if !seen[j] && m[j] == value {
+                    seen[j] = true;
+                    comp.push(j);
+                }
+            });
+        }
+        Some((comp, touches_edge))
+    })
+}
+
 impl<T: Copy + Default> Plane<T> {
     /// A `width × height` plane filled with `T::default()`.
     pub fn new(width: usize, height: usize) -> Self {

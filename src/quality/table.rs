@@ -86,7 +86,8 @@ impl fmt::Display for SuiteReport {
             f,
             "contrast, rim (edge darkening), t.change (temporal change), incoh. (incoherent change): output / exemplar, \
              1 = like the exemplar; palette: W1 distance, 0 = the exemplar's colors (contrast and palette against the exemplar \
-             at the same distances from the edge); incoh.d: incoherent change against the exemplar's at the same distances from \
+             at the same distances from the edge, the palette of a shape deeper than the exemplar's paint at the \
+             exemplar's depths stretched to it); incoh.d: incoherent change against the exemplar's at the same distances from \
              the edge (its paint changes most near its advancing edge); motion: mean cosine with the target's motion \
              (a generated target's whole motion; on the exemplar's own masks the normal motion they show)"
         )?;

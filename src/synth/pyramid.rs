@@ -125,9 +125,15 @@ fn level(f: &FrameInputs, l: usize, coarse: Option<Nnf>, st: &mut StageTimes, ou
             } else {
                 (vote::vote_with(sl, &field, src.paper, p.schedule.vote_sigma, true), Vec::new())
             };
+            // The depths at which the exemplar is read (`ParamsBuilder::depth_stretch`).
+            let depth = if p.parts.depth_stretch && p.parts.tone_match {
+                tone::tone_depths(&gl.dist, &gl.mask, &field, &src.tone, src.border_width)
+            } else {
+                gl.dist.clone()
+            };
             if grain.is_empty() {
                 if p.parts.tone_match {
-                    tone::match_tone(&mut low, &field, &gl.mask, &gl.dist, &src.tone, src.paper);
+                    tone::match_tone(&mut low, &field, &gl.mask, &depth, &src.tone, src.paper);
                 }
                 return low;
             }
@@ -141,16 +147,16 @@ fn level(f: &FrameInputs, l: usize, coarse: Option<Nnf>, st: &mut StageTimes, ou
             // Its amplitude is then brought to the exemplar's at each depth (`tone::grain_gains`):
             // a density scaled by g is the factor raised to the power g.
             let before = low.clone();
-            tone::match_tone(&mut low, &field, &gl.mask, &gl.dist, &src.tone, src.paper);
+            tone::match_tone(&mut low, &field, &gl.mask, &depth, &src.tone, src.paper);
             let gains = (src.grain_tone.as_ref())
                 .filter(|_| p.parts.grain_match)
-                .map(|prof| tone::grain_gains(&before, &full, &field, &gl.mask, &gl.dist, prof));
+                .map(|prof| tone::grain_gains(&before, &full, &field, &gl.mask, &depth, prof));
             low.iter()
                 .zip(&before)
                 .zip(full)
                 .enumerate()
                 .map(|(q, ((l, b), f))| {
-                    let g = gains.as_ref().map_or([1.0; 3], |gains| tone::grain_gain_at(gains, gl.dist.data()[q]));
+                    let g = gains.as_ref().map_or([1.0; 3], |gains| tone::grain_gain_at(gains, depth.data()[q]));
                     std::array::from_fn(|k| {
                         if b[k] > 1e-4 { (l[k] * (f[k] / b[k]).powf(g[k])).clamp(0.0, 1.0) } else { f[k] }
                     })

@@ -72,6 +72,8 @@ const MAX_DETAIL_GAIN: f64 = 4.0;
 /// [`match_tone`]: the coarse band and detail of the first, the whole density of the second.
 pub(crate) struct ToneProfile {
     passes: [PassProfile; 2],
+    /// Per frame: the depth of the exemplar's paint, the largest distance from its edge.
+    reach: Vec<f32>,
 }
 
 /// The exemplar's statistics for one pass: its densities split at σ `sigma` ([`coarse_band`]).
@@ -90,8 +92,32 @@ struct PassProfile {
 impl ToneProfile {
     /// The profile of the exemplar frames `frames` with their guides, over the paper color `paper`.
     pub(crate) fn new(frames: &[Plane<Rgb>], guides: &[FrameGuides], paper: Rgb) -> ToneProfile {
-        ToneProfile { passes: [BAND_SIGMA, 0.0].map(|sigma| PassProfile::new(frames, guides, paper, sigma)) }
+        let reach = guides
+            .iter()
+            .map(|g| g.mask.data().iter().zip(g.dist.data()).filter(|(m, _)| **m).map(|(_, &d)| d).fold(0.0, f32::max))
+            .collect();
+        ToneProfile { passes: [BAND_SIGMA, 0.0].map(|sigma| PassProfile::new(frames, guides, paper, sigma)), reach }
     }
+}
+
+/// The depths at which the tone match and the grain's gain read the exemplar, for the
+/// target's pixels at distances `dist` from the edge of `mask`, matched by `field`
+/// ([`ParamsBuilder::depth_stretch`](super::ParamsBuilder::depth_stretch)): a part deeper than
+/// the exemplar's paint has its interior beyond the border width `band` stretched onto the
+/// exemplar's depths ([`crate::guide::stretched_depths`]), the paint's depth `R` being the
+/// mean over the part's matches of their exemplar frame's deepest pixel.
+pub(crate) fn tone_depths(dist: &Plane<f32>, mask: &Mask, field: &Nnf, prof: &ToneProfile, band: f32) -> Plane<f32> {
+    crate::guide::stretched_depths(dist, mask, band, |part| {
+        let (mut sum, mut n) = (0.0f64, 0usize);
+        for &q in part {
+            let m = field.data[q];
+            if m.ok && (m.i as usize) < prof.reach.len() {
+                sum += prof.reach[m.i as usize] as f64;
+                n += 1;
+            }
+        }
+        (n > 0).then(|| (sum / n as f64) as f32)
+    })
 }
 
 impl PassProfile {
