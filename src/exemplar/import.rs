@@ -498,41 +498,13 @@ fn clean(mask: &[bool], w: usize, h: usize, min_area: usize) -> Plane<f32> {
 /// Flips components of value `value` (4-connected) smaller than `min_area` pixels. Holes
 /// (`value == false`) touching the frame edge are background and kept.
 fn remove_small(m: &mut [bool], w: usize, h: usize, min_area: usize, value: bool) {
-    let flip: Vec<Vec<usize>> = components(m, w, h, value)
+    let flip: Vec<Vec<usize>> = crate::img::components(m, w, h, value)
         .filter(|(comp, touches_edge)| comp.len() < min_area && (value || !touches_edge))
         .map(|(comp, _)| comp)
         .collect();
     for i in flip.into_iter().flatten() {
         m[i] = !value;
     }
-}
-
-/// The 4-connected components of the pixels of `m` equal to `value`, each with whether it
-/// touches the frame edge.
-fn components(m: &[bool], w: usize, h: usize, value: bool) -> impl Iterator<Item = (Vec<usize>, bool)> + '_ {
-    let mut seen = vec![false; w * h];
-    (0..w * h).filter_map(move |start| {
-        if seen[start] || m[start] != value {
-            return None;
-        }
-        let mut comp = vec![start];
-        seen[start] = true;
-        let mut head = 0;
-        let mut touches_edge = false;
-        while head < comp.len() {
-            let i = comp[head];
-            head += 1;
-            let (x, y) = (i % w, i / w);
-            touches_edge |= x == 0 || y == 0 || x == w - 1 || y == h - 1;
-            crate::img::for_each_neighbour4(i, w, h, |j| {
-                if !seen[j] && m[j] == value {
-                    seen[j] = true;
-                    comp.push(j);
-                }
-            });
-        }
-        Some((comp, touches_edge))
-    })
 }
 
 /// Fills, frame by frame, the holes enclosed by paint (components of paper that do not touch
@@ -551,7 +523,7 @@ fn fill_painted_holes(masks: &mut [Plane<f32>]) {
         let (prev, cur) = (&before[k - 1], &mut after[0]);
         let (w, h) = cur.size();
         let m: Vec<bool> = cur.data().iter().map(|&v| v >= 0.5).collect();
-        let fill: Vec<usize> = components(&m, w, h, false)
+        let fill: Vec<usize> = crate::img::components(&m, w, h, false)
             .filter(|(comp, touches_edge)| {
                 !touches_edge && 2 * comp.iter().filter(|&&i| prev.data()[i] >= 0.5).count() >= comp.len()
             })
