@@ -1064,7 +1064,7 @@ impl ParamsBuilder {
     /// width of the edge every pixel keeps its depth; deeper, a connected part whose deepest
     /// pixel lies at `D`, more than the paint's own depth `R` (the deepest pixel of the
     /// exemplar frames its matches come from, averaged over the part), reads the paint at
-    /// `d' = b + (d − b)·(R − b)/(D − b)` ([`crate::guide::stretched_depths`]). A part no
+    /// `d' = b + (d − b)·(R − b)/(D − b)` (`guide::stretched_depths`). A part no
     /// deeper than the paint keeps its depths, and the identity is left as it is.
     ///
     /// Read at their own depths, every depth beyond the exemplar's deepest took the tones of
