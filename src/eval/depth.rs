@@ -44,9 +44,7 @@ pub(crate) fn region_bins(depth: &Plane<f32>, region: &Mask) -> Vec<u64> {
 /// the exemplar is never deeper, so the exemplar measured against itself is measured at its
 /// own depths.
 pub(crate) fn paint_depth(shapes: &[Shape]) -> f32 {
-    let deepest =
-        |s: &Shape| s.sdf.data().iter().zip(s.mask.data()).filter(|(_, m)| **m).map(|(&d, _)| d).fold(0.0, f32::max);
-    shapes.iter().map(deepest).fold(0.0, f32::max)
+    shapes.iter().map(|s| crate::guide::deepest_inside(&s.sdf, &s.mask)).fold(0.0, f32::max)
 }
 
 /// The exemplar's contrast and colors per depth bin.

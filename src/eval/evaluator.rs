@@ -127,10 +127,12 @@ impl Reference {
     /// The depths at which `shape`'s pixels are compared with the exemplar's
     /// ([`EvalOptions::depth_stretch`]): its signed distances, a part deeper than the
     /// exemplar's paint stretched onto the paint's depths.
-    pub(crate) fn matched_depths(&self, shape: &Shape) -> Plane<f32> {
+    pub(crate) fn matched_depths<'s>(&self, shape: &'s Shape) -> std::borrow::Cow<'s, Plane<f32>> {
         match self.stretch {
-            Some((band, reach)) => crate::guide::stretched_depths(&shape.sdf, &shape.mask, band, |_| Some(reach)),
-            None => shape.sdf.clone(),
+            Some((band, reach)) => {
+                std::borrow::Cow::Owned(crate::guide::stretched_depths(&shape.sdf, &shape.mask, band, |_| Some(reach)))
+            }
+            None => std::borrow::Cow::Borrowed(&shape.sdf),
         }
     }
 

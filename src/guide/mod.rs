@@ -50,7 +50,7 @@ mod stream;
 pub use extent::{ExtentHistogram, compute_sequence, compute_sequence_with_flow, extent_scale};
 pub use preprocess::preprocess_mask;
 pub use sdf::sdf;
-pub(crate) use sdf::stretched_depths;
+pub(crate) use sdf::{deepest_inside, stretched_depths};
 pub use stream::{GuideStream, GuideStreamBuilder};
 
 use crate::error::{Error, Result};

@@ -27,6 +27,12 @@ pub fn no_boundary_distance(w: usize, h: usize) -> f32 {
     ((w * w + h * h) as f64).sqrt() as f32
 }
 
+/// The largest of the distances `dist` over the pixels of `mask`: how deep its paint reaches
+/// (0 for an empty mask).
+pub(crate) fn deepest_inside(dist: &Plane<f32>, mask: &Mask) -> f32 {
+    dist.data().iter().zip(mask.data()).filter(|(_, m)| **m).map(|(&d, _)| d).fold(0.0, f32::max)
+}
+
 /// The depths at which a shape reads a paint whose own depth is `reach` (not in the papers):
 /// the signed distances `dist` of `mask` with each 4-connected part deeper than its paint
 /// stretched onto the paint's depths.

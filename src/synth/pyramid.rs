@@ -127,9 +127,9 @@ fn level(f: &FrameInputs, l: usize, coarse: Option<Nnf>, st: &mut StageTimes, ou
             };
             // The depths at which the exemplar is read (`ParamsBuilder::depth_stretch`).
             let depth = if p.parts.depth_stretch && p.parts.tone_match {
-                tone::tone_depths(&gl.dist, &gl.mask, &field, &src.tone, src.border_width)
+                std::borrow::Cow::Owned(tone::tone_depths(&gl.dist, &gl.mask, &field, &src.tone, src.border_width))
             } else {
-                gl.dist.clone()
+                std::borrow::Cow::Borrowed(&gl.dist)
             };
             if grain.is_empty() {
                 if p.parts.tone_match {

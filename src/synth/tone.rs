@@ -92,10 +92,7 @@ struct PassProfile {
 impl ToneProfile {
     /// The profile of the exemplar frames `frames` with their guides, over the paper color `paper`.
     pub(crate) fn new(frames: &[Plane<Rgb>], guides: &[FrameGuides], paper: Rgb) -> ToneProfile {
-        let reach = guides
-            .iter()
-            .map(|g| g.mask.data().iter().zip(g.dist.data()).filter(|(m, _)| **m).map(|(_, &d)| d).fold(0.0, f32::max))
-            .collect();
+        let reach = guides.iter().map(|g| crate::guide::deepest_inside(&g.dist, &g.mask)).collect();
         ToneProfile { passes: [BAND_SIGMA, 0.0].map(|sigma| PassProfile::new(frames, guides, paper, sigma)), reach }
     }
 }
