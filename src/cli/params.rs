@@ -143,7 +143,9 @@ pub struct SynthFlags {
     /// exemplar at the same distance from the edge on shapes larger than its paint),
     /// depth-stretch (a shape deeper than the exemplar's paint takes the tones of the
     /// exemplar's calm, pale middle everywhere deeper than the paint reaches, as before
-    /// 2026-12-07), repaint-first (the first frame is painted once, from a random field: its rim band is
+    /// 2026-12-07), resting-normal (where the shape does not move its patches are not turned,
+    /// as in the paper: the middle of a large resting shape is a mosaic of pieces whose lobes
+    /// run every way and whose motifs repeat in rows along the edge), repaint-first (the first frame is painted once, from a random field: its rim band is
     /// rough and the paint jumps between frames 1 and 2), turn (a still's patches are never
     /// turned: on a turning shape the carried paint's pieces turn while the patches they
     /// sample do not, and the paint blurs over a long animation).
@@ -175,6 +177,7 @@ pub enum Part {
     GrainMatch,
     ToneMatch,
     DepthStretch,
+    RestingNormal,
     RepaintFirst,
     Turn,
 }
@@ -282,6 +285,7 @@ impl SynthFlags {
                 Part::GrainMatch => b.grain_match(false),
                 Part::ToneMatch => b.tone_match(false),
                 Part::DepthStretch => b.depth_stretch(false),
+                Part::RestingNormal => b.resting_normal(false),
                 Part::RepaintFirst => b.repaint_first(false),
                 Part::Turn => b.turn(false),
             };

@@ -117,6 +117,7 @@ pub(crate) struct Parts {
     pub grain_match: bool,
     pub tone_match: bool,
     pub depth_stretch: bool,
+    pub resting_normal: bool,
     pub repaint_first: bool,
     pub turn: bool,
 }
@@ -146,6 +147,7 @@ impl Default for Parts {
             grain_match: true,
             tone_match: true,
             depth_stretch: true,
+            resting_normal: true,
             repaint_first: true,
             turn: true,
         }
@@ -1080,6 +1082,33 @@ impl ParamsBuilder {
     /// Default: on.
     pub fn depth_stretch(mut self, on: bool) -> Self {
         self.p.parts.depth_stretch = on;
+        self
+    }
+
+    /// Where the target does not move, turn the patches by the shape's outward normal (not in
+    /// the papers): the direction rule M (thesis §3.3) aligns the exemplar's flow direction at
+    /// the source with the target's flow direction, and a target pixel with no flow (below
+    /// 0.02 px a frame) has none, so its patches were never turned (θ = 0). A resting shape is
+    /// paint that has spread to its outline, as the exemplar's paint spread to its own; with
+    /// this rule its direction is its outward normal −∇I^dist, the direction a growing shape's
+    /// flow has, so the exemplar's radial structure — lobes and fingers that run out from the
+    /// bloom's middle, the dark rim's inner edge — keeps its orientation toward the shape's
+    /// edge, and a rim piece can come from anywhere along the exemplar's rim, turned to fit.
+    /// The ring of patch centres just outside the mask, where the flow is zero by convention,
+    /// takes the direction of the mask pixel it faces. A ridge of the distance field (the
+    /// middle of a shape) has no normal and stays unturned.
+    ///
+    /// Without it, the middle of a resting shape several times the exemplar's size is a
+    /// mosaic of unturned pieces: each piece's lobes run the way they ran wherever the piece
+    /// was cut from the bloom, and pieces next to each other along an edge are cut from the
+    /// same side of it, so the same motif repeats in rows parallel to the edge (ink-rims: rows
+    /// of pale cells and rectangular dark blotches; rose-burst: a lattice of its paper's light
+    /// fibres; yellow-granules: wavy bands). The figures are in the README (*Decisions and
+    /// simplifications*).
+    ///
+    /// Default: on.
+    pub fn resting_normal(mut self, on: bool) -> Self {
+        self.p.parts.resting_normal = on;
         self
     }
 

@@ -87,7 +87,7 @@ fn level(f: &FrameInputs, l: usize, coarse: Option<Nnf>, st: &mut StageTimes, ou
     let gl = &f.pyr[l];
     let ext_cap = p.parts.ext_clamp.then_some(src.ext_max);
     let mut tgt = timed(&mut st.target, || {
-        TargetLevel::new(gl, &src.quant, src.border_width, ext_cap, sl.ext_falloff, src.paper)
+        TargetLevel::new(gl, &src.quant, src.border_width, ext_cap, sl.ext_falloff, src.paper, p.parts.resting_normal)
     });
     out.masks[l] = shift::mask_flags(&tgt);
     let prev_down = temporal_guide(f, l, &mut tgt, st);

@@ -6,6 +6,7 @@ use super::params::HALF;
 use super::source::{IN_MASK, INTERIOR, LANES, PixInfo, Quant, VALID, dilate, extent_falloff, flow_dir};
 use crate::guide::FrameGuides;
 use crate::img::Rgb;
+use glam::Vec2;
 use rayon::prelude::*;
 
 /// Padding of the target arrays: ⌊n/2⌋, so every window of a pixel in the frame is inside.
@@ -33,6 +34,46 @@ pub(crate) struct TargetLevel {
     pub spin: Vec<(f32, f32)>,
 }
 
+/// The direction of target pixel (x, y) for the direction rule: that of its flow; where it
+/// does not move and `resting_normal` is set
+/// ([`ParamsBuilder::resting_normal`](super::ParamsBuilder::resting_normal)), the shape's
+/// outward normal. A pixel outside the mask (the ring of patch centres around it, where the
+/// flow is zero by convention) takes the normal where the mask pixel it faces, one pixel inside
+/// along the normal, rests too, and none (θ = 0, as without the rule) where that pixel moves.
+fn direction(g: &FrameGuides, x: usize, y: usize, resting_normal: bool) -> Vec2 {
+    let flow = flow_dir(g.flow.get(x, y));
+    if !resting_normal || flow != Vec2::ZERO {
+        return flow;
+    }
+    let Some((normal, grad)) = outward_normal(&g.dist, x, y) else { return Vec2::ZERO };
+    let d = g.dist.get(x, y);
+    if d >= 0.0 {
+        return normal;
+    }
+    // The distances of a coarser pyramid level keep the finest level's units: `grad` pixels of
+    // distance per pixel of the level.
+    let (w, h) = g.dist.size();
+    let inside = Vec2::new(x as f32, y as f32) - normal * (1.0 - d / grad);
+    let (xi, yi) =
+        (inside.x.round().clamp(0.0, (w - 1) as f32) as usize, inside.y.round().clamp(0.0, (h - 1) as f32) as usize);
+    // The ring of a moving shape keeps θ = 0, as before the rule.
+    if g.flow.get(xi, yi) == Vec2::ZERO { normal } else { Vec2::ZERO }
+}
+
+/// The outward unit normal of the shape at (x, y), −∇dist by central differences (one-sided
+/// at the frame's edge), and the gradient's length (1 at the finest level, 2^l at level l,
+/// whose distances keep the finest level's units); `None` where the gradient is under a
+/// quarter of that (a ridge of the distance field, or a mask covering the whole frame).
+fn outward_normal(dist: &crate::img::Plane<f32>, x: usize, y: usize) -> Option<(Vec2, f32)> {
+    let (w, h) = dist.size();
+    let (x0, x1, y0, y1) = (x.saturating_sub(1), (x + 1).min(w - 1), y.saturating_sub(1), (y + 1).min(h - 1));
+    let gx = (dist.get(x1, y) - dist.get(x0, y)) / (x1 - x0).max(1) as f32;
+    let gy = (dist.get(x, y1) - dist.get(x, y0)) / (y1 - y0).max(1) as f32;
+    let g = Vec2::new(-gx, -gy);
+    let len = g.length();
+    (len >= 0.25).then(|| (g / len, len))
+}
+
 impl TargetLevel {
     /// Builds the level from its guides. `ext_cap` clamps the extents (None = no clamp);
     /// `falloff` fades them out in the interior as the source level does
@@ -44,6 +85,7 @@ impl TargetLevel {
         ext_cap: Option<f32>,
         falloff: bool,
         fill: Rgb,
+        resting_normal: bool,
     ) -> TargetLevel {
         let (w, h) = g.mask.size();
         let stride = w + 2 * TPAD;
@@ -88,7 +130,7 @@ impl TargetLevel {
                     flags |= VALID;
                 }
                 *out = PixInfo {
-                    dir: flow_dir(g.flow.get(x, y)),
+                    dir: direction(g, x, y, resting_normal),
                     dist,
                     ext_pos: g.ext_pos.get(x, y),
                     ext_neg: g.ext_neg.get(x, y),
@@ -121,5 +163,40 @@ impl TargetLevel {
     #[inline]
     pub fn segment(&self, idx: usize) -> usize {
         (self.info[idx].flags & INTERIOR != 0) as usize
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::img::Plane;
+
+    /// A disc of radius 10 centred at (20, 20) in a 40 × 40 frame, with `flow` inside it.
+    fn disc(flow: Vec2) -> FrameGuides {
+        let c = Vec2::new(20.0, 20.0);
+        let dist = Plane::from_fn(40, 40, |x, y| 10.0 - (Vec2::new(x as f32, y as f32) - c).length());
+        let mask = dist.map(|d| d >= 0.0);
+        let flow = Plane::from_fn(40, 40, |x, y| if mask.get(x, y) { flow } else { Vec2::ZERO });
+        let zero = Plane::filled(40, 40, 0.0f32);
+        FrameGuides { mask, dist, flow, ext_pos: zero.clone(), ext_neg: zero }
+    }
+
+    /// Where the shape rests its direction is the outward normal, inside and in the ring just
+    /// outside; where it moves, the flow's, and the ring has none (as without the rule); the
+    /// middle (a ridge of the distance field) has none; without the rule a resting shape has
+    /// none anywhere.
+    #[test]
+    fn the_direction_is_the_flow_or_where_the_shape_rests_its_normal() {
+        let close = |a: Vec2, b: Vec2| (a - b).length() < 0.05;
+        let rest = disc(Vec2::ZERO);
+        assert!(close(direction(&rest, 26, 20, true), Vec2::X), "inside, right of the middle");
+        assert!(close(direction(&rest, 20, 13, true), -Vec2::Y), "inside, above the middle");
+        assert!(close(direction(&rest, 20, 31, true), Vec2::Y), "outside, below");
+        assert_eq!(direction(&rest, 20, 20, true), Vec2::ZERO, "the middle");
+        assert_eq!(direction(&rest, 26, 20, false), Vec2::ZERO, "without the rule");
+        let moving = disc(Vec2::new(0.0, 2.0));
+        assert!(close(direction(&moving, 26, 20, true), Vec2::Y), "inside: the flow");
+        assert_eq!(direction(&moving, 31, 20, true), Vec2::ZERO, "the ring of a moving shape");
+        assert_eq!(direction(&moving, 31, 20, false), Vec2::ZERO, "the ring without the rule");
     }
 }

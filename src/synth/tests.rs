@@ -638,3 +638,59 @@ fn the_seam_cost_keeps_the_field_in_larger_pieces() {
     eprintln!("neighbour continuation deeper than 8 px: seam cost 0 {off:.3}, 5 {on:.3}");
     assert!(on > off + 0.2, "seam cost 5: {on:.3} against {off:.3} without");
 }
+
+/// On a disc that does not move (radius 30), synthesized from the disc exemplar (whose flow
+/// runs radially outward; border width 6): the share of the finest field's matches in the
+/// interior, 8 to 24 px inside the edge, whose rotation M takes the target's outward normal
+/// onto the exemplar's flow direction at the source (or onto its opposite: the flipped option,
+/// −M), within 25°; and the share of those matches that are turned (|θ| > 10°; the carried
+/// field of the second frame turns some by a degree or two). Seed 5, two frames;
+/// `resting_normal` as given.
+fn resting_disc_rotations(resting_normal: bool) -> (f64, f64) {
+    let params = Params::builder().seed(5).resting_normal(resting_normal).build().unwrap();
+    let (mut s, _, _) = disc_synthesizer_with(8, 5, params);
+    s.set_debug(true);
+    let c = Vec2::new(48.0, 48.0);
+    let t = disc_guides(96, 96, c, 30.0, 0.0, 0, 1);
+    assert!(t.flow.data().iter().all(|f| *f == Vec2::ZERO), "the disc does not move");
+    s.step(&t).unwrap();
+    let field = s.step(&t).unwrap().debug.unwrap().field;
+    let src_center = Vec2::new(32.0, 32.0);
+    let (mut n, mut aligned, mut turned) = (0usize, 0usize, 0usize);
+    for y in 0..96 {
+        for x in 0..96 {
+            let [i, sx, sy, theta] = field.get(x, y);
+            let d = t.dist.get(x, y);
+            let s_off = Vec2::new(sx, sy) - src_center;
+            if i.is_nan() || !(8.0..=24.0).contains(&d) || s_off.length() < 3.0 {
+                continue;
+            }
+            let normal = (Vec2::new(x as f32, y as f32) - c).normalize();
+            let m = Vec2::from_angle(theta).rotate(normal);
+            n += 1;
+            aligned += (m.dot(s_off.normalize()).abs() > 25f32.to_radians().cos()) as usize;
+            turned += (theta.abs() > 10f32.to_radians()) as usize;
+        }
+    }
+    assert!(n > 1000, "{n} matches measured");
+    (aligned as f64 / n as f64, turned as f64 / n as f64)
+}
+
+/// A resting shape's patches are turned by its outward normal
+/// (`ParamsBuilder::resting_normal`): the exemplar's direction of spread at the source lies
+/// along the shape's normal, as it does where a shape grows. Without the rule none is turned
+/// (θ = 0: the target has no flow direction), and the directions agree only where the interior
+/// continues the border band's pieces, which the border channel keeps on the same side of the
+/// exemplar's disc (a random direction agrees within 25° with a chance of 0.28). Measured:
+/// 0.998 of the interior's matches aligned with the rule (0.872 turned), 0.584 without (none
+/// turned). Floors: 0.9, and 0.3 above the run without the rule.
+#[test]
+fn a_resting_shape_turns_its_patches_by_its_normal() {
+    let (on, on_turned) = resting_disc_rotations(true);
+    let (off, off_turned) = resting_disc_rotations(false);
+    eprintln!(
+        "aligned with the normal: {on:.3} (turned {on_turned:.3}); without the rule {off:.3} (turned {off_turned:.3})"
+    );
+    assert_eq!(off_turned, 0.0, "without the rule no patch is turned");
+    assert!(on > 0.9 && on > off + 0.3, "aligned {on:.3} with the rule, {off:.3} without");
+}
