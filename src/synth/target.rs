@@ -62,8 +62,8 @@ fn direction(g: &FrameGuides, x: usize, y: usize, resting_normal: bool) -> Vec2 
 
 /// The outward unit normal of the shape at (x, y), −∇dist by central differences (one-sided
 /// at the frame's edge), and the gradient's length (1 at the finest level, 2^l at level l,
-/// whose distances keep the finest level's units); `None` where the gradient is under a
-/// quarter of that (a ridge of the distance field, or a mask covering the whole frame).
+/// whose distances keep the finest level's units); `None` where the gradient is shorter than
+/// ¼ (a ridge of the distance field, or a mask covering the whole frame).
 fn outward_normal(dist: &crate::img::Plane<f32>, x: usize, y: usize) -> Option<(Vec2, f32)> {
     let (w, h) = dist.size();
     let (x0, x1, y0, y1) = (x.saturating_sub(1), (x + 1).min(w - 1), y.saturating_sub(1), (y + 1).min(h - 1));
