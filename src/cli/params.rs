@@ -535,7 +535,8 @@ mod tests {
         let off =
             off.settle(false).receding_hold(false).aging(false).pace(false).full_carry(false).contrast_balance(0.0);
         let off = off.travel_hold(false).grain_phase(false).grain_match(false);
-        let off = off.tone_match(false).depth_stretch(false).repaint_first(false).turn(false).build().unwrap();
+        let off = off.tone_match(false).depth_stretch(false).resting_normal(false);
+        let off = off.repaint_first(false).turn(false).build().unwrap();
         assert_eq!(p, off);
     }
 
