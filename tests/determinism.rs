@@ -53,13 +53,12 @@ fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
 /// advection went unseen.
 ///
 /// Update `PINNED` only in a commit that changes the output on purpose, and say so in its
-/// message (the last: a resting shape's patches are turned by its outward normal,
-/// `ParamsBuilder::resting_normal`, issue 13; before: the tone and grain corrections reach a
-/// round shape's middle, whose deepest depth bins have too few pixels for their own
-/// (`tone::from_shallower`)).
+/// message (the last: the tone and grain corrections reach a round shape's middle, whose deepest
+/// depth bins have too few pixels for their own (`tone::from_shallower`), issue 13; before: the
+/// grain keeps its amplitude inside the rim, `ParamsBuilder::grain_match`).
 #[test]
 fn engine_output_is_pinned() {
-    const PINNED: u64 = 0xfb77_863b_e5f1_2867;
+    const PINNED: u64 = 0x1659_df96_b664_a425;
     let demo = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/demo/waving.json");
     let a = anim::load(&demo, &LoadOptions::default().scale(0.5)).unwrap();
     let out = std::env::temp_dir().join(format!("fm-pinned-{}", std::process::id()));

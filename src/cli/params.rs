@@ -91,6 +91,12 @@ pub struct SynthFlags {
     /// Also optimize the finest pyramid level (slower; the thesis only votes it).
     #[arg(long)]
     pub optimize_finest: bool,
+    /// Turn the patches of a shape where it does not move by its outward normal, so the
+    /// exemplar's lobes and veins run out to its edge instead of repeating in rows (a large
+    /// still shape's middle); its paint then changes more from frame to frame (README,
+    /// *A resting shape is turned by its normal*).
+    #[arg(long)]
+    pub resting_normal: bool,
     /// Give the output back the exemplar's fine grain that voting averages away (the default;
     /// the flag is kept so that scripts which give it keep working).
     #[arg(long, conflicts_with = "no_grain")]
@@ -143,9 +149,7 @@ pub struct SynthFlags {
     /// exemplar at the same distance from the edge on shapes larger than its paint),
     /// depth-stretch (a shape deeper than the exemplar's paint takes the tones of the
     /// exemplar's calm, pale middle everywhere deeper than the paint reaches, as before
-    /// 2026-12-07), resting-normal (where the shape does not move its patches are not turned,
-    /// as in the paper: the middle of a large resting shape is a mosaic of pieces whose lobes
-    /// run every way and whose motifs repeat in rows along the edge), repaint-first (the first frame is painted once, from a random field: its rim band is
+    /// 2026-12-07), repaint-first (the first frame is painted once, from a random field: its rim band is
     /// rough and the paint jumps between frames 1 and 2), turn (a still's patches are never
     /// turned: on a turning shape the carried paint's pieces turn while the patches they
     /// sample do not, and the paint blurs over a long animation).
@@ -177,7 +181,6 @@ pub enum Part {
     GrainMatch,
     ToneMatch,
     DepthStretch,
-    RestingNormal,
     RepaintFirst,
     Turn,
 }
@@ -196,6 +199,7 @@ impl SynthFlags {
         let mut b: ParamsBuilder = Params::builder()
             .seed(self.seed)
             .optimize_finest(self.optimize_finest)
+            .resting_normal(self.resting_normal)
             .keep_grain(!self.no_grain)
             .fit_thin_layers(fit);
         if let Some(v) = self.dist_weight {
@@ -285,7 +289,6 @@ impl SynthFlags {
                 Part::GrainMatch => b.grain_match(false),
                 Part::ToneMatch => b.tone_match(false),
                 Part::DepthStretch => b.depth_stretch(false),
-                Part::RestingNormal => b.resting_normal(false),
                 Part::RepaintFirst => b.repaint_first(false),
                 Part::Turn => b.turn(false),
             };
@@ -328,6 +331,9 @@ impl SynthFlags {
         push("prev-sigma", self.prev_sigma.map(|v| v.to_string()));
         if self.optimize_finest {
             out.push("--optimize-finest".into());
+        }
+        if self.resting_normal {
+            out.push("--resting-normal".into());
         }
         if self.keep_grain {
             out.push("--keep-grain".into());
@@ -518,6 +524,7 @@ mod tests {
             prev_sigma: Some(0.25),
             contrast_balance: Some(2.5),
             optimize_finest: true,
+            resting_normal: true,
             keep_grain: true,
             without: <Part as clap::ValueEnum>::value_variants().to_vec(),
             ..Default::default()
@@ -535,8 +542,7 @@ mod tests {
         let off =
             off.settle(false).receding_hold(false).aging(false).pace(false).full_carry(false).contrast_balance(0.0);
         let off = off.travel_hold(false).grain_phase(false).grain_match(false);
-        let off = off.tone_match(false).depth_stretch(false).resting_normal(false);
-        let off = off.repaint_first(false).turn(false).build().unwrap();
+        let off = off.tone_match(false).depth_stretch(false).repaint_first(false).turn(false).build().unwrap();
         assert_eq!(p, off);
     }
 

@@ -612,7 +612,7 @@ fn a_moving_shape_carries_its_paint_with_all_of_its_motion() {
 }
 
 /// The still disc's field, deeper than 8 px, after `frames` frames synthesized with the seam
-/// cost `seams` (seed 3), its patches unturned (`resting_normal` off: see
+/// cost `seams` (seed 3), its patches unturned (`resting_normal` off, the default: see
 /// [`the_seam_cost_keeps_the_field_in_larger_pieces`]): the share of neighbouring matches
 /// that continue each other.
 fn still_disc_continuation(seams: f32, frames: usize) -> f64 {
@@ -633,12 +633,12 @@ fn still_disc_continuation(seams: f32, frames: usize) -> f64 {
 /// paint: without it the color term's optimum is a field of one- or two-pixel pieces, whose
 /// 2 × 2 up-scaled blocks show as a stipple (`ParamsBuilder::seam_cost`). Measured (3 frames,
 /// seed 3): 0.584 of the neighbouring matches continue each other without it, 0.910 with the
-/// default 5; the test asks for at least 0.2 more. The disc rests, so by default its patches
-/// are turned by its normal (`ParamsBuilder::resting_normal`), and the test switches that off:
-/// each match's turn then follows the normal at its pixel and the exemplar's flow at its
-/// source, both radial on these small discs, and a piece is a turning copy rather than a
-/// rigid one — 0.462 and 0.641 continue within ¼ px (0.501 and 0.749 within ½ px, the seam
-/// cost's own tolerance).
+/// default 5; the test asks for at least 0.2 more. The test keeps `ParamsBuilder::
+/// resting_normal` off (the default): with it the resting disc's patches are turned by its
+/// normal, each match's turn follows the normal at its pixel and the exemplar's flow at its
+/// source, both radial on these small discs, and a piece is a turning copy rather than a rigid
+/// one — 0.462 and 0.641 continue within ¼ px (0.501 and 0.749 within ½ px, the seam cost's
+/// own tolerance).
 #[test]
 fn the_seam_cost_keeps_the_field_in_larger_pieces() {
     let (off, on) = (still_disc_continuation(0.0, 3), still_disc_continuation(5.0, 3));
