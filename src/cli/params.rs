@@ -94,7 +94,7 @@ pub struct SynthFlags {
     /// Turn the patches of a shape where it does not move by its outward normal, so the
     /// exemplar's lobes and veins run out to its edge instead of repeating in rows (a large
     /// still shape's middle); its paint then changes more from frame to frame (README,
-    /// *A resting shape is turned by its normal*).
+    /// *A resting shape turned by its normal*).
     #[arg(long)]
     pub resting_normal: bool,
     /// Give the output back the exemplar's fine grain that voting averages away (the default;

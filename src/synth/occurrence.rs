@@ -380,7 +380,7 @@ mod tests {
         let (rgb, g) = disc_exemplar(48, 40, 9, 2);
         let pyr = SourcePyramid::build(&rgb, &g, &params, 4.0, 1);
         let tg = disc_guides(36, 30, glam::Vec2::new(18.0, 15.0), 11.0, 0.5, 2, 5);
-        let tgt = TargetLevel::new(&tg, &pyr.quant, 4.0, None, pyr.levels[0].ext_falloff, [1.0; 3], true);
+        let tgt = TargetLevel::new(&tg, &pyr.quant, 4.0, None, pyr.levels[0].ext_falloff, [1.0; 3], false);
         (pyr, tgt)
     }
 

@@ -1095,8 +1095,9 @@ impl ParamsBuilder {
     /// bloom's middle, the dark rim's inner edge — keeps its orientation toward the shape's
     /// edge, and a rim piece can come from anywhere along the exemplar's rim, turned to fit.
     /// The ring of patch centres just outside the mask, where the flow is zero by convention,
-    /// takes the direction of the mask pixel it faces. A ridge of the distance field (the
-    /// middle of a shape) has no normal and stays unturned.
+    /// takes the normal where the mask pixel it faces rests too, and stays unturned where that
+    /// pixel moves. A ridge of the distance field (the middle of a shape) has no normal and
+    /// stays unturned.
     ///
     /// Without it, the middle of a resting shape several times the exemplar's size is a
     /// mosaic of unturned pieces: each piece's lobes run the way they ran wherever the piece

@@ -491,7 +491,7 @@ pub(crate) mod tests {
         let pyr = SourcePyramid::build(&rgb, &g, &params, 6.0, 1);
         let src = &pyr.levels[0];
         let (trgb, tg) = synthetic(30, 30, 12.0, 99);
-        let mut tgt = TargetLevel::new(&tg, &pyr.quant, 6.0, None, src.ext_falloff, [1.0, 1.0, 1.0], true);
+        let mut tgt = TargetLevel::new(&tg, &pyr.quant, 6.0, None, src.ext_falloff, [1.0, 1.0, 1.0], false);
         let mut rng = SplitMix64::keyed(&[5]);
         for (k, px) in tgt.cur.iter_mut().enumerate() {
             let c = trgb.data()[k % trgb.len()];
@@ -587,7 +587,7 @@ pub(crate) mod tests {
         let (rgb, g) = synthetic(32, 32, 12.0, 3);
         let pyr = SourcePyramid::build(&[rgb.clone(), rgb.clone()], &[g.clone(), g.clone()], &params, 5.0, 1);
         let src = &pyr.levels[0];
-        let mut tgt = TargetLevel::new(&g, &pyr.quant, 5.0, None, src.ext_falloff, [1.0; 3], true);
+        let mut tgt = TargetLevel::new(&g, &pyr.quant, 5.0, None, src.ext_falloff, [1.0; 3], false);
         for y in 0..32 {
             for x in 0..32 {
                 let k = tgt.pindex(x, y);
@@ -623,7 +623,7 @@ mod speed {
         let pyr = SourcePyramid::build(&rgb, &g, &params, 10.0, 1);
         let src = &pyr.levels[0];
         let (_, tg) = synthetic(500, 400, 150.0, 99);
-        let tgt = TargetLevel::new(&tg, &pyr.quant, 10.0, None, src.ext_falloff, [1.0, 1.0, 1.0], true);
+        let tgt = TargetLevel::new(&tg, &pyr.quant, 10.0, None, src.ext_falloff, [1.0, 1.0, 1.0], false);
         let feat = src.feat.clone();
         let mut rng = SplitMix64::keyed(&[5]);
         let n: usize = std::env::var("FM_N").ok().and_then(|v| v.parse().ok()).unwrap_or(2_000_000);
@@ -681,7 +681,7 @@ mod terms {
         let run = |params: Params, edit: &dyn Fn(&mut TargetLevel)| {
             let pyr = SourcePyramid::build(&[rgb.clone(), rgb.clone()], &[g.clone(), g.clone()], &params, 5.0, 1);
             let src = &pyr.levels[0];
-            let mut tgt = TargetLevel::new(&g, &pyr.quant, 5.0, None, src.ext_falloff, [1.0; 3], true);
+            let mut tgt = TargetLevel::new(&g, &pyr.quant, 5.0, None, src.ext_falloff, [1.0; 3], false);
             for y in 0..40 {
                 for x in 0..40 {
                     let k = tgt.pindex(x, y);
