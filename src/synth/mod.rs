@@ -622,6 +622,12 @@ fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevS
     let change = shift::AreaChange::of(g.mask.data(), &prev.masks[0]);
     let moves = change.moves_rather_than_grows();
     let travel_hold = p.parts.travel_hold && p.parts.full_carry && p.parts.advect && change.travels();
+    let (w, h) = g.mask.size();
+    let resting: Vec<bool> = if p.parts.resting_normal {
+        (0..w * h).map(|q| target::resting_normal(g, q % w, q / w).is_some()).collect()
+    } else {
+        Vec::new()
+    };
     let inputs = shift::ShiftInputs {
         carry_new: moves,
         src: &src.levels[0],
@@ -645,6 +651,7 @@ fn shift_previous(src: &SourcePyramid, p: &Params, g: &FrameGuides, prev: &PrevS
         // Read only where the shape travels.
         moving: travel_hold && shift::all_rim(g.dist.data(), src.border_width) && shift::moves_noticeably(&prev.flow),
         turn: p.turns(src.levels[0].frames),
+        resting: &resting,
     };
     shift::shift_nnf(&inputs, &prev.nnf0)
 }

@@ -1091,7 +1091,10 @@ impl ParamsBuilder {
     /// 0.02 px a frame) has none, so its patches were never turned (θ = 0). A resting shape is
     /// paint that has spread to its outline, as the exemplar's paint spread to its own; with
     /// this rule its direction is its outward normal −∇I^dist, the direction a growing shape's
-    /// flow has, so the exemplar's radial structure — lobes and fingers that run out from the
+    /// flow has, aligned with the exemplar's own outward normal −∇S^dist at the source (a
+    /// bloom's direction of spread; unlike its flow, which fades out and turns where the paint
+    /// slows down, the normal at a pixel stays put from one exemplar frame to the next, so a
+    /// match keeps its turn as its paint ages), so the exemplar's radial structure — lobes and fingers that run out from the
     /// bloom's middle, the dark rim's inner edge — keeps its orientation toward the shape's
     /// edge, and a rim piece can come from anywhere along the exemplar's rim, turned to fit.
     /// The ring of patch centres just outside the mask, where the flow is zero by convention,
@@ -1108,12 +1111,13 @@ impl ParamsBuilder {
     /// simplifications*).
     ///
     /// Default: off (`--resting-normal` on the command line). It costs a resting shape's paint
-    /// steadiness: each match's turn follows the exemplar's flow at its source, which changes as
-    /// the paint ages through the exemplar's frames, so a still target changes more from frame
-    /// to frame — 0.80 → 1.10 of the exemplar's own change in `tests/engine_quality.rs` (a
-    /// 100-px still disc, whose floor is the exemplar's 1.0), 0.32–0.99 → 0.38–1.05 on the
-    /// 24-frame suite's still ellipses (seed 1). Until that is resolved the look it gives is a
-    /// choice, not the default.
+    /// some steadiness: turned pieces are smaller than the unturned mosaic's, and their seams
+    /// settle anew as the paint ages, so a still target changes more from frame to frame —
+    /// 0.80 → 1.01 of the exemplar's own change in `tests/engine_quality.rs` (a 130 × 110 still
+    /// ellipse, whose floor is the exemplar's 1.0; 1.10 when the rule aligned with the
+    /// exemplar's flow instead of its normal), 0.32–0.99 → 0.43–1.00 on the 24-frame suite's
+    /// still ellipses (seed 1). Until that is resolved the look it gives is a choice, not the
+    /// default.
     pub fn resting_normal(mut self, on: bool) -> Self {
         self.p.parts.resting_normal = on;
         self

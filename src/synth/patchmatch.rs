@@ -11,7 +11,7 @@
 use super::nnf::{Match, Nnf, aligning_rotation};
 use super::params::{HALF, PATCH, Params};
 use super::patch::{Center, Query, Window, patch_error, patch_error_pair};
-use super::source::{BORDER_IN_MASK, Feat, IN_MASK, SourceLevel, VALID, bit_set, floor4_i32};
+use super::source::{BORDER_IN_MASK, Feat, IN_MASK, RESTING, SourceLevel, VALID, bit_set, floor4_i32};
 use super::target::TargetLevel;
 use crate::rng::SplitMix64;
 use glam::Vec2;
@@ -163,16 +163,20 @@ impl<'a> Ctx<'a> {
         rotation_like(self.params, self.tgt.info[q].dir, s_dir, flip)
     }
 
-    /// Validates a candidate center: the nearest pixel is a valid center of the right segment.
+    /// Validates a candidate center: the nearest pixel is a valid center of the right segment;
+    /// returns its padded index.
     #[inline]
-    pub fn check(&self, seg: Option<usize>, i: usize, x: f32, y: f32) -> Option<Vec2> {
-        self.check_at(seg, self.src.nearest(i, x, y)?)
+    pub fn check(&self, seg: Option<usize>, i: usize, x: f32, y: f32) -> Option<usize> {
+        let idx = self.src.nearest(i, x, y)?;
+        self.src.is_valid(seg, idx).then_some(idx)
     }
 
-    /// [`Ctx::check`] for the pixel with padded index `idx`; returns its flow direction.
+    /// The source direction the rule aligns target pixel q's with, at the exemplar pixel with
+    /// padded index `idx`: its flow direction, or where q rests and takes its shape's normal
+    /// ([`RESTING`]), the exemplar's own normal there ([`SourceLevel::normal`]).
     #[inline]
-    fn check_at(&self, seg: Option<usize>, idx: usize) -> Option<Vec2> {
-        self.src.is_valid(seg, idx).then(|| self.src.dirs[idx])
+    pub fn s_dir(&self, q: usize, idx: usize) -> Vec2 {
+        if self.tgt.info[q].flags & RESTING != 0 { self.src.normal(idx) } else { self.src.dirs[idx] }
     }
 
     /// Hints the CPU to load the exemplar rows a candidate at padded index `idx` reads.
@@ -227,7 +231,7 @@ impl<'a> Ctx<'a> {
             idx = list[rng.below(list.len())] as usize;
         }
         let (i, x, y) = self.src.coords(idx);
-        let (c, s, flip) = self.rotation_like(q, self.src.dirs[idx], false);
+        let (c, s, flip) = self.rotation_like(q, self.s_dir(q, idx), false);
         Match { x: x as f32, y: y as f32, c, s, err: f32::INFINITY, i: i as u16, flip, ok: true }
     }
 
@@ -249,8 +253,8 @@ impl<'a> Ctx<'a> {
         pen: f32,
         stats: &mut Stats,
     ) {
-        let Some(s_dir) = self.check(seg, i, x, y) else { return };
-        self.try_valid(q, win, best, s_dir, i, x, y, like, pen, stats);
+        let Some(idx) = self.check(seg, i, x, y) else { return };
+        self.try_valid(q, win, best, self.s_dir(q, idx), i, x, y, like, pen, stats);
     }
 
     /// [`Ctx::try_candidate`] for a center already checked, whose flow direction is `s_dir`;
@@ -425,7 +429,7 @@ impl<'a> Ctx<'a> {
                 self.prefetch(cands[k + AHEAD].0 as usize);
             }
             let (idx, i, x, y) = cands[k];
-            let s_dir = src.dirs[idx as usize];
+            let s_dir = self.s_dir(q, idx as usize);
             let pen = seams(i, x as f32, y as f32);
             self.try_valid(q, &win, &mut best, s_dir, i as usize, x as f32, y as f32, None, pen, stats);
         }

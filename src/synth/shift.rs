@@ -65,6 +65,11 @@ pub(crate) struct ShiftInputs<'a> {
     /// ([`flow_turn`]) — where the field is carried along the motion (with the time shift and
     /// the advection; without them nothing is carried, and nothing turns).
     pub turn: bool,
+    /// The pixels that rest and take their shape's normal as their direction
+    /// ([`super::target::resting_normal`]; empty without
+    /// [`super::ParamsBuilder::resting_normal`]): their matches turn with the exemplar's normal
+    /// rather than its flow when they move ([`moved`]).
+    pub resting: &'a [bool],
 }
 
 /// Pixels of motion that one frame of deviation from the nominal step costs in the paper's
@@ -333,26 +338,30 @@ fn warped_from(inp: &ShiftInputs, prev: &Nnf, p: Vec2, q: usize, dt: f32, c: f32
 fn placed(inp: &ShiftInputs, q: usize, m: Match, i: usize, x: f32, y: f32) -> Match {
     let shifted = Match { i: i as u16, err: f32::INFINITY, ..m };
     let (x, y) = reanchor(inp.src, i, x, y, inp.dist_cur[q], inp.band).unwrap_or((x, y));
-    moved(inp.src, &shifted, x, y).unwrap_or(shifted)
+    let normal = inp.resting.get(q).copied().unwrap_or(false);
+    moved(inp.src, &shifted, x, y, normal).unwrap_or(shifted)
 }
 
 /// Match `m` moved to `(x, y)` in its exemplar frame; `m` itself if that is where it is; `None`
 /// where the move is refused. The move must stay valid and on the same side of any divide of
 /// the exemplar's flow (its source, where the paint started). The rotation M turns with the
 /// exemplar's flow direction between the two points, so it still maps the target's flow onto
-/// the exemplar's where the match now is (the θ rule holds after the move).
-fn moved(src: &SourceLevel, m: &Match, x: f32, y: f32) -> Option<Match> {
+/// the exemplar's where the match now is (the θ rule holds after the move); with `normal` (a
+/// resting target pixel, [`super::ParamsBuilder::resting_normal`]) with the exemplar's normal.
+fn moved(src: &SourceLevel, m: &Match, x: f32, y: f32, normal: bool) -> Option<Match> {
     if (x, y) == (m.x, m.y) {
         return Some(*m);
     }
-    let info_at = |x: f32, y: f32| src.info_at(m.i as usize, x, y).map(|(_, inf)| inf);
-    let to = info_at(x, y).filter(|to| to.flags & VALID != 0)?;
+    let at = |x: f32, y: f32| src.nearest(m.i as usize, x, y);
+    let to = at(x, y).filter(|&k| src.info[k].flags & VALID != 0)?;
+    let dir = |k: usize| if normal { src.normal(k) } else { src.info[k].dir };
     let (mut c, mut s) = (m.c, m.s);
-    if let Some(from) = info_at(m.x, m.y)
-        && from.dir != Vec2::ZERO
-        && to.dir != Vec2::ZERO
+    if let Some(from) = at(m.x, m.y).map(dir)
+        && from != Vec2::ZERO
+        && dir(to) != Vec2::ZERO
     {
-        let (cos_p, sin_p) = (from.dir.dot(to.dir), from.dir.perp_dot(to.dir));
+        let to = dir(to);
+        let (cos_p, sin_p) = (from.dot(to), from.perp_dot(to));
         if cos_p < 0.0 {
             return None;
         }

@@ -88,6 +88,10 @@ pub(crate) const VALID: u8 = 1;
 pub(crate) const INTERIOR: u8 = 2;
 /// Flag: inside the (pre-processed) mask itself.
 pub(crate) const IN_MASK: u8 = 4;
+/// Flag (target pixels only): the direction is the resting shape's outward normal
+/// ([`super::ParamsBuilder::resting_normal`]), to be aligned with the exemplar's own normal
+/// at the source ([`SourceLevel::normal`]) rather than its flow.
+pub(crate) const RESTING: u8 = 8;
 
 /// The "segment" a target pixel inside its mask and in the border segment asks its candidates
 /// to come from ([`SourceLevel::valid_table`]) at the finest level: the border segment's
@@ -286,6 +290,21 @@ pub(crate) struct SourceLevel {
 }
 
 impl SourceLevel {
+    /// The exemplar's outward unit normal −∇S^dist at padded index `idx` (central differences
+    /// within its frame), or zero on a ridge of the distance field (gradient shorter than ¼ of
+    /// the finest level's pixel per level pixel): the direction a resting target pixel's
+    /// normal is aligned with ([`RESTING`]). Unlike the flow, it does not turn or vanish as
+    /// the paint at a pixel ages from frame to frame, so a match carried forward in time keeps
+    /// its turn.
+    #[inline]
+    pub fn normal(&self, idx: usize) -> Vec2 {
+        let d = |k: usize| self.info.get(k).map_or(0.0, |p| p.dist);
+        let s = self.stride;
+        let g = Vec2::new(d(idx.saturating_sub(1)) - d(idx + 1), d(idx.saturating_sub(s)) - d(idx + s)) * 0.5;
+        let len = g.length();
+        if len >= 0.25 { g / len } else { Vec2::ZERO }
+    }
+
     /// Padded index of pixel (x, y) of frame i.
     #[inline]
     pub fn index(&self, i: usize, x: usize, y: usize) -> usize {
@@ -1003,6 +1022,35 @@ mod tests {
         for x in [0.3f32, 0.77, 0.5] {
             assert_eq!(q.quantize(0, x), q.units(0, x).round() as u8);
         }
+    }
+
+    /// The exemplar's normal at a pixel is the outward direction of its shape (a disc: radial),
+    /// at every level, and none at the disc's middle (a ridge of the distance field; at the
+    /// finest level, where the disc is centred on a pixel).
+    #[test]
+    fn the_exemplar_normal_points_out_of_its_shape() {
+        use crate::synth::patch::tests::synthetic;
+        let params = crate::synth::Params::builder().build().unwrap();
+        let (rgb, g) = synthetic(40, 40, 14.0, 1);
+        let pyr = SourcePyramid::build(&[rgb], &[g], &params, 6.0, 2);
+        for (l, src) in pyr.levels.iter().enumerate() {
+            let c = (src.w / 2) as f32;
+            let mut n = 0;
+            for y in 0..src.h {
+                for x in 0..src.w {
+                    let off = Vec2::new(x as f32, y as f32) - Vec2::splat(c);
+                    if off.length() < 2.0 || off.length() > c - 3.0 {
+                        continue;
+                    }
+                    let normal = src.normal(src.index(0, x, y));
+                    assert!(normal.dot(off.normalize()) > 0.95, "level {l} ({x}, {y}): {normal}");
+                    n += 1;
+                }
+            }
+            assert!(n > 20, "level {l}: {n} pixels");
+        }
+        let src = &pyr.levels[0];
+        assert_eq!(src.normal(src.index(0, 20, 20)), Vec2::ZERO, "the middle");
     }
 
     #[test]

@@ -3,7 +3,7 @@
 //! the guide channels, and per-pixel info.
 
 use super::params::HALF;
-use super::source::{IN_MASK, INTERIOR, LANES, PixInfo, Quant, VALID, dilate, extent_falloff, flow_dir};
+use super::source::{IN_MASK, INTERIOR, LANES, PixInfo, Quant, RESTING, VALID, dilate, extent_falloff, flow_dir};
 use crate::guide::FrameGuides;
 use crate::img::Rgb;
 use glam::Vec2;
@@ -37,18 +37,28 @@ pub(crate) struct TargetLevel {
 /// The direction of target pixel (x, y) for the direction rule: that of its flow; where it
 /// does not move and `resting_normal` is set
 /// ([`ParamsBuilder::resting_normal`](super::ParamsBuilder::resting_normal)), the shape's
-/// outward normal. A pixel outside the mask (the ring of patch centres around it, where the
-/// flow is zero by convention) takes the normal where the mask pixel it faces, one pixel inside
-/// along the normal, rests too, and none (θ = 0, as without the rule) where that pixel moves.
+/// outward normal ([`resting_normal`]).
 fn direction(g: &FrameGuides, x: usize, y: usize, resting_normal: bool) -> Vec2 {
     let flow = flow_dir(g.flow.get(x, y));
     if !resting_normal || flow != Vec2::ZERO {
         return flow;
     }
-    let Some((normal, grad)) = outward_normal(&g.dist, x, y) else { return Vec2::ZERO };
+    self::resting_normal(g, x, y).unwrap_or(Vec2::ZERO)
+}
+
+/// The outward normal of a target pixel (x, y) that rests: inside the mask where it does not
+/// move (less than [`super::source::FLOW_EPS`]); outside it (the ring of patch centres around it, where the flow is zero by
+/// convention), where the mask pixel it faces, one pixel inside along the normal, does not
+/// move either. `None` where the pixel or the one it faces moves (the ring of a moving shape
+/// keeps θ = 0, as without the rule), and on a ridge of the distance field.
+pub(crate) fn resting_normal(g: &FrameGuides, x: usize, y: usize) -> Option<Vec2> {
+    if flow_dir(g.flow.get(x, y)) != Vec2::ZERO {
+        return None;
+    }
+    let (normal, grad) = outward_normal(&g.dist, x, y)?;
     let d = g.dist.get(x, y);
     if d >= 0.0 {
-        return normal;
+        return Some(normal);
     }
     // The distances of a coarser pyramid level keep the finest level's units: `grad` pixels of
     // distance per pixel of the level.
@@ -56,8 +66,7 @@ fn direction(g: &FrameGuides, x: usize, y: usize, resting_normal: bool) -> Vec2 
     let inside = Vec2::new(x as f32, y as f32) - normal * (1.0 - d / grad);
     let (xi, yi) =
         (inside.x.round().clamp(0.0, (w - 1) as f32) as usize, inside.y.round().clamp(0.0, (h - 1) as f32) as usize);
-    // The ring of a moving shape keeps θ = 0, as before the rule.
-    if g.flow.get(xi, yi) == Vec2::ZERO { normal } else { Vec2::ZERO }
+    (g.flow.get(xi, yi) == Vec2::ZERO).then_some(normal)
 }
 
 /// The outward unit normal of the shape at (x, y), −∇dist by central differences (one-sided
@@ -129,8 +138,12 @@ impl TargetLevel {
                 if roi.get(x, y) {
                     flags |= VALID;
                 }
+                let dir = direction(g, x, y, resting_normal);
+                if resting_normal && flow_dir(g.flow.get(x, y)) == Vec2::ZERO && dir != Vec2::ZERO {
+                    flags |= RESTING;
+                }
                 *out = PixInfo {
-                    dir: direction(g, x, y, resting_normal),
+                    dir,
                     dist,
                     ext_pos: g.ext_pos.get(x, y),
                     ext_neg: g.ext_neg.get(x, y),
