@@ -1094,9 +1094,10 @@ impl ParamsBuilder {
     /// flow has, aligned with the exemplar's own outward normal −∇S^dist at the source (a
     /// bloom's direction of spread; unlike its flow, which fades out and turns where the paint
     /// slows down, the normal at a pixel stays put from one exemplar frame to the next, so a
-    /// match keeps its turn as its paint ages), so the exemplar's radial structure — lobes and fingers that run out from the
-    /// bloom's middle, the dark rim's inner edge — keeps its orientation toward the shape's
-    /// edge, and a rim piece can come from anywhere along the exemplar's rim, turned to fit.
+    /// match keeps its turn as its paint ages). The exemplar's radial structure — lobes and
+    /// fingers that run out from the bloom's middle, the dark rim's inner edge — then keeps its
+    /// orientation toward the shape's edge, and a rim piece can come from anywhere along the
+    /// exemplar's rim, turned to fit.
     /// The ring of patch centres just outside the mask, where the flow is zero by convention,
     /// takes the normal where the mask pixel it faces rests too, and stays unturned where that
     /// pixel moves. A ridge of the distance field (the middle of a shape) has no normal and

@@ -291,11 +291,11 @@ pub(crate) struct SourceLevel {
 
 impl SourceLevel {
     /// The exemplar's outward unit normal −∇S^dist at padded index `idx` (central differences
-    /// within its frame), or zero on a ridge of the distance field (gradient shorter than ¼ of
-    /// the finest level's pixel per level pixel): the direction a resting target pixel's
-    /// normal is aligned with ([`RESTING`]). Unlike the flow, it does not turn or vanish as
-    /// the paint at a pixel ages from frame to frame, so a match carried forward in time keeps
-    /// its turn.
+    /// within its frame), or zero on a ridge of the distance field (a gradient shorter than ¼;
+    /// the distances keep the finest level's units at every level): the direction a resting
+    /// target pixel's normal is aligned with ([`RESTING`]). Unlike the flow, it does not turn
+    /// or vanish as the paint at a pixel ages from frame to frame, so a match carried forward
+    /// in time keeps its turn.
     #[inline]
     pub fn normal(&self, idx: usize) -> Vec2 {
         let d = |k: usize| self.info.get(k).map_or(0.0, |p| p.dist);

@@ -34,23 +34,22 @@ pub(crate) struct TargetLevel {
     pub spin: Vec<(f32, f32)>,
 }
 
-/// The direction of target pixel (x, y) for the direction rule: that of its flow; where it
-/// does not move and `resting_normal` is set
-/// ([`ParamsBuilder::resting_normal`](super::ParamsBuilder::resting_normal)), the shape's
-/// outward normal ([`resting_normal`]).
-fn direction(g: &FrameGuides, x: usize, y: usize, resting_normal: bool) -> Vec2 {
-    let flow = flow_dir(g.flow.get(x, y));
-    if !resting_normal || flow != Vec2::ZERO {
-        return flow;
+/// The direction of target pixel (x, y) for the direction rule, and whether it is the resting
+/// normal ([`resting_normal`], with `resting_normal` set) rather than its flow's.
+fn direction(g: &FrameGuides, x: usize, y: usize, resting_normal: bool) -> (Vec2, bool) {
+    match if resting_normal { self::resting_normal(g, x, y) } else { None } {
+        Some(normal) => (normal, true),
+        None => (flow_dir(g.flow.get(x, y)), false),
     }
-    self::resting_normal(g, x, y).unwrap_or(Vec2::ZERO)
 }
 
-/// The outward normal of a target pixel (x, y) that rests: inside the mask where it does not
-/// move (less than [`super::source::FLOW_EPS`]); outside it (the ring of patch centres around it, where the flow is zero by
-/// convention), where the mask pixel it faces, one pixel inside along the normal, does not
-/// move either. `None` where the pixel or the one it faces moves (the ring of a moving shape
-/// keeps θ = 0, as without the rule), and on a ridge of the distance field.
+/// The outward normal of target pixel (x, y) where it rests, its direction for the direction
+/// rule with [`ParamsBuilder::resting_normal`](super::ParamsBuilder::resting_normal) (a
+/// moving pixel's is its flow's): inside the mask where it moves less than
+/// [`super::source::FLOW_EPS`]; outside it (the ring of patch centres around it, where the
+/// flow is zero by convention) where the mask pixel it faces, one pixel inside along the
+/// normal, does not move either. `None` where the pixel or the one it faces moves (the ring of
+/// a moving shape keeps θ = 0, as without the rule), and on a ridge of the distance field.
 pub(crate) fn resting_normal(g: &FrameGuides, x: usize, y: usize) -> Option<Vec2> {
     if flow_dir(g.flow.get(x, y)) != Vec2::ZERO {
         return None;
@@ -138,8 +137,8 @@ impl TargetLevel {
                 if roi.get(x, y) {
                     flags |= VALID;
                 }
-                let dir = direction(g, x, y, resting_normal);
-                if resting_normal && flow_dir(g.flow.get(x, y)) == Vec2::ZERO && dir != Vec2::ZERO {
+                let (dir, rests) = direction(g, x, y, resting_normal);
+                if rests {
                     flags |= RESTING;
                 }
                 *out = PixInfo {
@@ -202,14 +201,14 @@ mod tests {
     fn the_direction_is_the_flow_or_where_the_shape_rests_its_normal() {
         let close = |a: Vec2, b: Vec2| (a - b).length() < 0.05;
         let rest = disc(Vec2::ZERO);
-        assert!(close(direction(&rest, 26, 20, true), Vec2::X), "inside, right of the middle");
-        assert!(close(direction(&rest, 20, 13, true), -Vec2::Y), "inside, above the middle");
-        assert!(close(direction(&rest, 20, 31, true), Vec2::Y), "outside, below");
-        assert_eq!(direction(&rest, 20, 20, true), Vec2::ZERO, "the middle");
-        assert_eq!(direction(&rest, 26, 20, false), Vec2::ZERO, "without the rule");
+        assert!(close(direction(&rest, 26, 20, true).0, Vec2::X), "inside, right of the middle");
+        assert!(close(direction(&rest, 20, 13, true).0, -Vec2::Y), "inside, above the middle");
+        assert!(close(direction(&rest, 20, 31, true).0, Vec2::Y), "outside, below");
+        assert_eq!(direction(&rest, 20, 20, true).0, Vec2::ZERO, "the middle");
+        assert_eq!(direction(&rest, 26, 20, false).0, Vec2::ZERO, "without the rule");
         let moving = disc(Vec2::new(0.0, 2.0));
-        assert!(close(direction(&moving, 26, 20, true), Vec2::Y), "inside: the flow");
-        assert_eq!(direction(&moving, 31, 20, true), Vec2::ZERO, "the ring of a moving shape");
-        assert_eq!(direction(&moving, 31, 20, false), Vec2::ZERO, "the ring without the rule");
+        assert!(close(direction(&moving, 26, 20, true).0, Vec2::Y), "inside: the flow");
+        assert_eq!(direction(&moving, 31, 20, true).0, Vec2::ZERO, "the ring of a moving shape");
+        assert_eq!(direction(&moving, 31, 20, false).0, Vec2::ZERO, "the ring without the rule");
     }
 }
