@@ -180,6 +180,16 @@ pub(crate) fn flow_dir(f: Vec2) -> Vec2 {
     if m >= FLOW_EPS && m.is_finite() { f / m } else { Vec2::ZERO }
 }
 
+/// The outward unit normal −∇dist / |∇dist| of a shape from the gradient `grad` of its signed
+/// distance (positive inside), and the gradient's length; `None` where it is shorter than ¼ (a
+/// ridge of the distance field, or a mask covering the whole frame). The distances of every
+/// pyramid level keep the finest level's units, so the length is about 2^l at level l.
+#[inline]
+pub(crate) fn outward_unit(grad: Vec2) -> Option<(Vec2, f32)> {
+    let len = grad.length();
+    (len >= 0.25).then(|| (-grad / len, len))
+}
+
 /// Dilates a mask by a square of radius `r` (Chebyshev distance).
 pub(crate) fn dilate(mask: &Plane<bool>, r: usize) -> Plane<bool> {
     let (w, h) = mask.size();
@@ -291,8 +301,8 @@ pub(crate) struct SourceLevel {
 
 impl SourceLevel {
     /// The exemplar's outward unit normal −∇S^dist at padded index `idx` (central differences
-    /// within its frame), or zero on a ridge of the distance field (a gradient shorter than ¼;
-    /// the distances keep the finest level's units at every level): the direction a resting
+    /// within its frame, [`outward_unit`]), or zero on a ridge of the distance field: the
+    /// direction a resting
     /// target pixel's normal is aligned with ([`RESTING`]). Unlike the flow, it does not turn
     /// or vanish as the paint at a pixel ages from frame to frame, so a match carried forward
     /// in time keeps its turn.
@@ -300,9 +310,8 @@ impl SourceLevel {
     pub fn normal(&self, idx: usize) -> Vec2 {
         let d = |k: usize| self.info.get(k).map_or(0.0, |p| p.dist);
         let s = self.stride;
-        let g = Vec2::new(d(idx.saturating_sub(1)) - d(idx + 1), d(idx.saturating_sub(s)) - d(idx + s)) * 0.5;
-        let len = g.length();
-        if len >= 0.25 { g / len } else { Vec2::ZERO }
+        let grad = Vec2::new(d(idx + 1) - d(idx.saturating_sub(1)), d(idx + s) - d(idx.saturating_sub(s))) * 0.5;
+        outward_unit(grad).map_or(Vec2::ZERO, |(n, _)| n)
     }
 
     /// Padded index of pixel (x, y) of frame i.

@@ -3,7 +3,9 @@
 //! the guide channels, and per-pixel info.
 
 use super::params::HALF;
-use super::source::{IN_MASK, INTERIOR, LANES, PixInfo, Quant, RESTING, VALID, dilate, extent_falloff, flow_dir};
+use super::source::{
+    IN_MASK, INTERIOR, LANES, PixInfo, Quant, RESTING, VALID, dilate, extent_falloff, flow_dir, outward_unit,
+};
 use crate::guide::FrameGuides;
 use crate::img::Rgb;
 use glam::Vec2;
@@ -68,18 +70,14 @@ pub(crate) fn resting_normal(g: &FrameGuides, x: usize, y: usize) -> Option<Vec2
     (g.flow.get(xi, yi) == Vec2::ZERO).then_some(normal)
 }
 
-/// The outward unit normal of the shape at (x, y), −∇dist by central differences (one-sided
-/// at the frame's edge), and the gradient's length (1 at the finest level, 2^l at level l,
-/// whose distances keep the finest level's units); `None` where the gradient is shorter than
-/// ¼ (a ridge of the distance field, or a mask covering the whole frame).
+/// The outward unit normal of the shape at (x, y) and the gradient's length
+/// ([`outward_unit`]), ∇dist by central differences (one-sided at the frame's edge).
 fn outward_normal(dist: &crate::img::Plane<f32>, x: usize, y: usize) -> Option<(Vec2, f32)> {
     let (w, h) = dist.size();
     let (x0, x1, y0, y1) = (x.saturating_sub(1), (x + 1).min(w - 1), y.saturating_sub(1), (y + 1).min(h - 1));
     let gx = (dist.get(x1, y) - dist.get(x0, y)) / (x1 - x0).max(1) as f32;
     let gy = (dist.get(x, y1) - dist.get(x, y0)) / (y1 - y0).max(1) as f32;
-    let g = Vec2::new(-gx, -gy);
-    let len = g.length();
-    (len >= 0.25).then(|| (g / len, len))
+    outward_unit(Vec2::new(gx, gy))
 }
 
 impl TargetLevel {
